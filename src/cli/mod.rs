@@ -1,0 +1,2 @@
+//! One file per subcommand: each defines its clap `…Args` and a `run`.
+pub mod bench;

@@ -1,0 +1,12 @@
+//! codimfx — codimensional surface-tension liquids with MLS particles.
+//!
+//! Implements Wang, Jin, Luo, Yang, Zhu, *Codimensional Surface Tension Flow
+//! using Moving-Least-Squares Particles*, ACM TOG 39(4), 2020. See
+//! `docs/architecture.md` for the module map and the data flow of a step.
+
+pub mod math;
+pub mod neighbors;
+pub mod particles;
+
+pub use math::{Real, Vec3};
+pub use particles::{Codim, Particles};

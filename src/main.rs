@@ -1,0 +1,27 @@
+//! The `codimfx` command line: argument parsing and file handling only; the
+//! numerics live in the `codimfx` library and the `surfacer` crate.
+use clap::{Parser, Subcommand};
+
+mod cli;
+
+/// codimfx: codimensional surface-tension liquids — volumes, thin sheets,
+/// filaments and droplets in one simulation (Wang et al., SIGGRAPH 2020).
+#[derive(Parser, Debug)]
+#[command(version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Measure run time (and error, where there is one) of a part of the solver.
+    Bench(cli::bench::BenchArgs),
+}
+
+fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Bench(a) => cli::bench::run(a),
+    }
+}

@@ -1,0 +1,1 @@
+//! surfacer — turns codimfx particle caches into renderable geometry.
