@@ -13,6 +13,40 @@
 use crate::math::{Real, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A small multiplicative hasher for integer cell keys (std's SipHash is
+/// several times slower here and the keys are not attacker-controlled).
+#[derive(Default, Clone, Copy)]
+pub struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    #[inline]
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7C_C1_B7_27_22_0A_95);
+    }
+    #[inline]
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+}
+
+/// Hash map keyed by cell, with [`CellHasher`].
+pub type CellMap<V> = HashMap<Cell, V, BuildHasherDefault<CellHasher>>;
 
 /// Integer cell coordinate.
 pub type Cell = [i32; 3];
@@ -35,19 +69,26 @@ pub struct CellGrid {
     /// Point indices ordered by cell.
     order: Vec<u32>,
     /// For every occupied cell, the range of `order` that holds its points.
-    ranges: HashMap<Cell, (u32, u32)>,
+    ranges: CellMap<(u32, u32)>,
+    /// Occupied cells in sorted order (deterministic traversal).
+    cells: Vec<Cell>,
 }
 
 impl CellGrid {
     /// Builds the grid over `points` with cell size `h` (> 0, finite).
     pub fn build(points: &[Vec3], h: Real) -> CellGrid {
-        assert!(h > 0.0 && h.is_finite(), "cell size must be positive and finite");
+        assert!(
+            h > 0.0 && h.is_finite(),
+            "cell size must be positive and finite"
+        );
         let inv_h = 1.0 / h;
         let cells: Vec<Cell> = points.par_iter().map(|p| cell_of(p, inv_h)).collect();
         let mut order: Vec<u32> = (0..points.len() as u32).collect();
         // Stable sort by cell: ties keep index order, so the grid is deterministic.
         order.par_sort_by_key(|&i| cells[i as usize]);
-        let mut ranges = HashMap::with_capacity(points.len() / 4 + 1);
+        let mut ranges =
+            CellMap::with_capacity_and_hasher(points.len() / 4 + 1, Default::default());
+        let mut occupied = Vec::new();
         let mut s = 0usize;
         while s < order.len() {
             let c = cells[order[s] as usize];
@@ -56,9 +97,16 @@ impl CellGrid {
                 e += 1;
             }
             ranges.insert(c, (s as u32, e as u32));
+            occupied.push(c);
             s = e;
         }
-        CellGrid { h, inv_h, order, ranges }
+        CellGrid {
+            h,
+            inv_h,
+            order,
+            ranges,
+            cells: occupied,
+        }
     }
 
     /// Cell size.
@@ -70,7 +118,13 @@ impl CellGrid {
     /// `r` must not exceed the cell size. The visiting order is deterministic
     /// but not sorted.
     #[inline]
-    pub fn for_each_within(&self, points: &[Vec3], q: &Vec3, r: Real, mut f: impl FnMut(usize, Real)) {
+    pub fn for_each_within(
+        &self,
+        points: &[Vec3],
+        q: &Vec3,
+        r: Real,
+        mut f: impl FnMut(usize, Real),
+    ) {
         debug_assert!(r <= self.h * (1.0 + 1e-12));
         let r2 = r * r;
         let c = cell_of(q, self.inv_h);
@@ -144,19 +198,47 @@ impl NeighborLists {
 /// neighbour. Each list is sorted by index.
 pub fn neighbor_lists(points: &[Vec3], radius: Real) -> NeighborLists {
     let grid = CellGrid::build(points, radius);
-    let rows: Vec<Vec<u32>> = (0..points.len())
-        .into_par_iter()
-        .map(|i| {
-            let mut row = Vec::with_capacity(64);
-            grid.for_each_within(points, &points[i], radius, |j, _| {
-                if j != i {
-                    row.push(j as u32)
+    let r2 = radius * radius;
+    // Queries are visited cell by cell: the 27 surrounding ranges are looked
+    // up once per cell and their candidates copied into a contiguous buffer.
+    let per_cell: Vec<Vec<(u32, Vec<u32>)>> = grid
+        .cells
+        .par_iter()
+        .map(|c| {
+            let mut cand: Vec<u32> = Vec::with_capacity(256);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        if let Some(&(s, e)) = grid.ranges.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
+                            cand.extend_from_slice(&grid.order[s as usize..e as usize]);
+                        }
+                    }
                 }
-            });
-            row.sort_unstable();
-            row
+            }
+            cand.sort_unstable();
+            let cand_x: Vec<Vec3> = cand.iter().map(|&j| points[j as usize]).collect();
+            let (s, e) = grid.ranges[c];
+            grid.order[s as usize..e as usize]
+                .iter()
+                .map(|&i| {
+                    let xi = points[i as usize];
+                    let row: Vec<u32> = cand
+                        .iter()
+                        .zip(&cand_x)
+                        .filter(|(&j, xj)| j != i && (*xj - xi).norm_squared() < r2)
+                        .map(|(&j, _)| j)
+                        .collect();
+                    (i, row)
+                })
+                .collect()
         })
         .collect();
+    let mut rows = vec![Vec::new(); points.len()];
+    for cell in per_cell {
+        for (i, row) in cell {
+            rows[i as usize] = row;
+        }
+    }
     NeighborLists::from_rows(rows)
 }
 
@@ -216,7 +298,11 @@ mod tests {
                 for k in 0..n {
                     // a little deterministic jitter so no distance ties the radius exactly
                     let j3 = ((i * 7 + j * 13 + k * 29) % 17) as Real / 17.0 * 0.1 * s;
-                    v.push(Vec3::new(i as Real * s + j3, j as Real * s - j3, k as Real * s + 0.5 * j3));
+                    v.push(Vec3::new(
+                        i as Real * s + j3,
+                        j as Real * s - j3,
+                        k as Real * s + 0.5 * j3,
+                    ));
                 }
             }
         }
@@ -247,7 +333,10 @@ mod tests {
 
     #[test]
     fn negative_coordinates_and_between() {
-        let pts: Vec<Vec3> = lattice(6, 0.1).into_iter().map(|p| p - Vec3::new(0.3, 0.3, 0.3)).collect();
+        let pts: Vec<Vec3> = lattice(6, 0.1)
+            .into_iter()
+            .map(|p| p - Vec3::new(0.3, 0.3, 0.3))
+            .collect();
         let q = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(-0.3, -0.3, -0.3)];
         let nl = neighbor_lists_between(&q, &pts, 0.15);
         for (qi, qp) in q.iter().enumerate() {
