@@ -7,6 +7,7 @@
 pub mod math;
 pub mod neighbors;
 pub mod particles;
+pub mod transition;
 
 pub use math::{Real, Vec3};
 pub use particles::{Codim, Particles};

@@ -1,0 +1,485 @@
+//! Codimension transitions (paper §8, Fig. 13).
+//!
+//! Every rule looks at a particle's neighbourhood through a pair of opposite
+//! spherical cones of radius h with apex at the particle, along one axis of
+//! its local frame F_p (Appendix A): b³ (the normal) for the volume↔sheet
+//! rules, b² (the in-plane normal of a sheet edge) for sheet→filament.
+//! [`cone_census`] is that one shared test; the rules below only read its
+//! counts.
+//!
+//! **Cone angle.** The paper's "cone angle θ" is read as the *half* aperture:
+//! a neighbour q is inside the cone along a when the angle between x_q − x_p
+//! and a is at most θ. With the paper's initial spacing h/3 this puts on
+//! average ≈ 4–5 neighbours of an interior sheet particle in each π/6 cone,
+//! so "exactly one cone is occupied" identifies an edge reliably; with a full
+//! aperture of π/6 an interior particle's cone holds ≈ 2 and random sampling
+//! holes trigger false edges. The constructed cases in the tests (a flat
+//! sheet edge, a sheet touching a volume, a thinning sheet, an isolated
+//! filament particle) pin this reading down.
+//!
+//! Rules (the new codimension is computed for all particles from the old
+//! state, then applied at once, so the result does not depend on order):
+//! - 0→1: cones along b³ with θ = π/3: exactly one cone holds volume or sheet
+//!   particles (the particle sits on one side of the interface), or both
+//!   cones hold sheet particles and the closest pair across the two cones is
+//!   nearer than `thin_distance` (the volume has become thin).
+//! - 1→0: cones along b³ with θ = π/4 both hold volume particles.
+//! - 1→2: cones along b² with θ = π/6: exactly one cone holds sheet or
+//!   filament particles (the particle is on a sheet's edge).
+//! - 2→3: no filament particle within h.
+//! The paper implements no 2→1; neither does this module.
+
+use crate::math::{Mat3, Real, Vec3};
+use crate::particles::Codim;
+use rayon::prelude::*;
+
+/// What the two cones along ±axis contain.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ConeCensus {
+    /// Neighbours per codimension inside the cone along +axis.
+    pub plus: [u32; 4],
+    /// Neighbours per codimension inside the cone along −axis.
+    pub minus: [u32; 4],
+    /// Sheet neighbours inside the + cone (indices into the particle arrays).
+    pub plus_sheet: Vec<u32>,
+    /// Sheet neighbours inside the − cone.
+    pub minus_sheet: Vec<u32>,
+}
+
+impl ConeCensus {
+    /// Number of neighbours of the given codimensions in the + and − cone.
+    pub fn count(&self, codims: &[Codim]) -> (u32, u32) {
+        let p = codims.iter().map(|c| self.plus[*c as usize]).sum();
+        let m = codims.iter().map(|c| self.minus[*c as usize]).sum();
+        (p, m)
+    }
+
+    /// True when exactly one of the two cones holds a particle of `codims`.
+    pub fn one_sided(&self, codims: &[Codim]) -> bool {
+        let (p, m) = self.count(codims);
+        (p > 0) != (m > 0)
+    }
+}
+
+/// Counts the neighbours of particle `p` inside the two opposite cones of
+/// half-aperture `half_angle` and radius `h` along ±`axis` (unit vector).
+/// Neighbours at the apex (distance 0) belong to neither cone.
+pub fn cone_census(
+    p: usize,
+    axis: &Vec3,
+    half_angle: Real,
+    h: Real,
+    x: &[Vec3],
+    codim: &[Codim],
+    nbrs: &[u32],
+) -> ConeCensus {
+    let cos_t = half_angle.cos();
+    let mut c = ConeCensus::default();
+    for &q in nbrs {
+        let q = q as usize;
+        if q == p {
+            continue;
+        }
+        let d = x[q] - x[p];
+        let r = d.norm();
+        if r == 0.0 || r >= h {
+            continue;
+        }
+        let ca = d.dot(axis) / r;
+        let k = codim[q] as usize;
+        if ca >= cos_t {
+            c.plus[k] += 1;
+            if codim[q] == Codim::Sheet {
+                c.plus_sheet.push(q as u32);
+            }
+        } else if -ca >= cos_t {
+            c.minus[k] += 1;
+            if codim[q] == Codim::Sheet {
+                c.minus_sheet.push(q as u32);
+            }
+        }
+    }
+    c
+}
+
+/// Parameters of the transition rules (paper §8). Angles in radians
+/// (half apertures, see the module doc), distances relative to h.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransitionParams {
+    /// Support radius h (m).
+    pub h: Real,
+    /// 0→1 cone half-aperture along b³ (paper: π/3).
+    pub volume_to_sheet_angle: Real,
+    /// 0→1 "volume is thin" distance between sheet particles across the two cones, relative to h.
+    pub thin_distance: Real,
+    /// 1→0 cone half-aperture along b³ (paper: π/4).
+    pub sheet_to_volume_angle: Real,
+    /// 1→2 cone half-aperture along b² (paper: π/6).
+    pub sheet_to_filament_angle: Real,
+    /// Enable the volume↔sheet rules (off in film-only scenes).
+    pub volume_rules: bool,
+}
+
+impl TransitionParams {
+    /// The paper's angles for support radius `h`; thin distance 0.5 h.
+    pub fn paper(h: Real) -> Self {
+        use std::f64::consts::PI;
+        TransitionParams {
+            h,
+            volume_to_sheet_angle: PI / 3.0,
+            thin_distance: 0.5,
+            sheet_to_volume_angle: PI / 4.0,
+            sheet_to_filament_angle: PI / 6.0,
+            volume_rules: true,
+        }
+    }
+}
+
+/// Number of transitions of each kind in one update.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct TransitionCounts {
+    /// Volume → sheet.
+    pub volume_to_sheet: u64,
+    /// Sheet → volume.
+    pub sheet_to_volume: u64,
+    /// Sheet → filament.
+    pub sheet_to_filament: u64,
+    /// Filament → point.
+    pub filament_to_point: u64,
+}
+
+impl TransitionCounts {
+    /// Total number of events.
+    pub fn total(&self) -> u64 {
+        self.volume_to_sheet
+            + self.sheet_to_volume
+            + self.sheet_to_filament
+            + self.filament_to_point
+    }
+}
+
+/// Smallest distance between a particle of `a` and one of `b`.
+fn min_cross_distance(x: &[Vec3], a: &[u32], b: &[u32]) -> Real {
+    let mut best = Real::INFINITY;
+    for &i in a {
+        for &j in b {
+            best = best.min((x[i as usize] - x[j as usize]).norm());
+        }
+    }
+    best
+}
+
+/// The codimension particle `p` should have, given the current state.
+/// `frame` holds b¹, b², b³ as columns; `nbrs` are all neighbours within h
+/// (any codimension). Fixed (boundary) particles never change.
+pub fn new_codim(
+    p: usize,
+    frame: &Mat3,
+    x: &[Vec3],
+    codim: &[Codim],
+    fixed: &[bool],
+    nbrs: &[u32],
+    prm: &TransitionParams,
+) -> Codim {
+    if fixed[p] {
+        return codim[p];
+    }
+    let b2: Vec3 = frame.column(1).into();
+    let b3: Vec3 = frame.column(2).into();
+    match codim[p] {
+        Codim::Volume if prm.volume_rules => {
+            let c = cone_census(p, &b3, prm.volume_to_sheet_angle, prm.h, x, codim, nbrs);
+            let one_side = c.one_sided(&[Codim::Volume, Codim::Sheet]);
+            let thin = !c.plus_sheet.is_empty()
+                && !c.minus_sheet.is_empty()
+                && min_cross_distance(x, &c.plus_sheet, &c.minus_sheet) < prm.thin_distance * prm.h;
+            if one_side || thin {
+                Codim::Sheet
+            } else {
+                Codim::Volume
+            }
+        }
+        Codim::Sheet => {
+            if prm.volume_rules {
+                let c = cone_census(p, &b3, prm.sheet_to_volume_angle, prm.h, x, codim, nbrs);
+                let (vp, vm) = c.count(&[Codim::Volume]);
+                if vp > 0 && vm > 0 {
+                    return Codim::Volume;
+                }
+            }
+            let c = cone_census(p, &b2, prm.sheet_to_filament_angle, prm.h, x, codim, nbrs);
+            if c.one_sided(&[Codim::Sheet, Codim::Filament]) {
+                Codim::Filament
+            } else {
+                Codim::Sheet
+            }
+        }
+        Codim::Filament => {
+            let has_filament = nbrs.iter().any(|&q| {
+                let q = q as usize;
+                q != p && codim[q] == Codim::Filament && (x[q] - x[p]).norm() < prm.h
+            });
+            if has_filament {
+                Codim::Filament
+            } else {
+                Codim::Point
+            }
+        }
+        c => c,
+    }
+}
+
+/// Updates every particle's codimension at once (Algorithm 1, line 2) and
+/// returns the counts of each transition. `frames[i]` is particle i's local
+/// frame (columns b¹, b², b³) and `nbrs(i)` its neighbours within h.
+pub fn update_codims<'a>(
+    x: &[Vec3],
+    codim: &mut [Codim],
+    fixed: &[bool],
+    frames: &[Mat3],
+    nbrs: impl Fn(usize) -> &'a [u32] + Sync,
+    prm: &TransitionParams,
+) -> TransitionCounts {
+    let old: &[Codim] = codim;
+    let next: Vec<Codim> = (0..x.len())
+        .into_par_iter()
+        .map(|p| new_codim(p, &frames[p], x, old, fixed, nbrs(p), prm))
+        .collect();
+    let mut n = TransitionCounts::default();
+    for (c, nc) in codim.iter_mut().zip(next) {
+        match (*c, nc) {
+            (Codim::Volume, Codim::Sheet) => n.volume_to_sheet += 1,
+            (Codim::Sheet, Codim::Volume) => n.sheet_to_volume += 1,
+            (Codim::Sheet, Codim::Filament) => n.sheet_to_filament += 1,
+            (Codim::Filament, Codim::Point) => n.filament_to_point += 1,
+            _ => {}
+        }
+        *c = nc;
+    }
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neighbors::neighbor_lists;
+
+    /// A flat square sheet in the xy plane, spacing s, n×n particles.
+    fn sheet(n: usize, s: Real) -> Vec<Vec3> {
+        let mut v = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                v.push(Vec3::new(i as Real * s, j as Real * s, 0.0));
+            }
+        }
+        v
+    }
+
+    /// In-plane frame for a particle of the flat sheet whose b² points away
+    /// from the sheet's centre (what PCA gives at an edge), b³ = z.
+    fn edge_frame(x: &Vec3, centre: &Vec3) -> Mat3 {
+        let mut d = x - centre;
+        d.z = 0.0;
+        let b2 = if d.norm() > 0.0 {
+            d.normalize()
+        } else {
+            Vec3::x()
+        };
+        let b3 = Vec3::z();
+        let b1 = b2.cross(&b3);
+        Mat3::from_columns(&[b1, b2, b3])
+    }
+
+    #[test]
+    fn flat_sheet_edge_becomes_filament_interior_stays() {
+        let h = 0.3;
+        let n = 11;
+        let x = sheet(n, h / 3.0);
+        let centre = x[(n / 2) * n + n / 2];
+        let codim = vec![Codim::Sheet; x.len()];
+        let fixed = vec![false; x.len()];
+        let frames: Vec<Mat3> = x.iter().map(|p| edge_frame(p, &centre)).collect();
+        let nl = neighbor_lists(&x, h);
+        let mut c = codim.clone();
+        let counts = update_codims(
+            &x,
+            &mut c,
+            &fixed,
+            &frames,
+            |i| nl.of(i),
+            &TransitionParams::paper(h),
+        );
+        for i in 0..n {
+            for j in 0..n {
+                let on_edge = i == 0 || j == 0 || i == n - 1 || j == n - 1;
+                let k = i * n + j;
+                // edge particles whose b² points straight out (the mid-edge ones) must turn;
+                // every interior particle must stay a sheet
+                if !on_edge {
+                    assert_eq!(c[k], Codim::Sheet, "interior particle {i},{j} changed");
+                } else if i == n / 2 || j == n / 2 {
+                    assert_eq!(c[k], Codim::Filament, "edge particle {i},{j} kept");
+                }
+            }
+        }
+        assert!(counts.sheet_to_filament >= 4 * (n as u64 - 2) - 8);
+        assert_eq!(
+            counts.volume_to_sheet + counts.sheet_to_volume + counts.filament_to_point,
+            0
+        );
+    }
+
+    #[test]
+    fn volume_surface_layer_becomes_sheet_and_interior_stays() {
+        // a slab of volume particles, z in [0, 5s]; b³ = z for everyone
+        let h = 0.3;
+        let s = h / 3.0;
+        let mut x = Vec::new();
+        for i in 0..8 {
+            for j in 0..8 {
+                for k in 0..6 {
+                    x.push(Vec3::new(i as Real * s, j as Real * s, k as Real * s));
+                }
+            }
+        }
+        let codim = vec![Codim::Volume; x.len()];
+        let fixed = vec![false; x.len()];
+        let frames = vec![Mat3::identity(); x.len()];
+        let nl = neighbor_lists(&x, h);
+        let mut c = codim.clone();
+        let n = update_codims(
+            &x,
+            &mut c,
+            &fixed,
+            &frames,
+            |i| nl.of(i),
+            &TransitionParams::paper(h),
+        );
+        for (idx, p) in x.iter().enumerate() {
+            let k = (p.z / s).round() as i32;
+            let expect = if k == 0 || k == 5 {
+                Codim::Sheet
+            } else {
+                Codim::Volume
+            };
+            assert_eq!(c[idx], expect, "layer {k}");
+        }
+        assert_eq!(n.volume_to_sheet, 2 * 64);
+    }
+
+    #[test]
+    fn sheet_inside_volume_merges_and_thin_volume_turns_to_sheet() {
+        let h = 0.3;
+        let s = h / 3.0;
+        // a sheet particle at the centre of a volume block → 1→0
+        let mut x = Vec::new();
+        let mut codim = Vec::new();
+        for i in -2..=2 {
+            for j in -2..=2 {
+                for k in -2..=2 {
+                    x.push(Vec3::new(i as Real * s, j as Real * s, k as Real * s));
+                    codim.push(if (i, j, k) == (0, 0, 0) {
+                        Codim::Sheet
+                    } else {
+                        Codim::Volume
+                    });
+                }
+            }
+        }
+        let centre = codim.iter().position(|c| *c == Codim::Sheet).unwrap();
+        let frames = vec![Mat3::identity(); x.len()];
+        let fixed = vec![false; x.len()];
+        let nl = neighbor_lists(&x, h);
+        let prm = TransitionParams::paper(h);
+        assert_eq!(
+            new_codim(
+                centre,
+                &frames[centre],
+                &x,
+                &codim,
+                &fixed,
+                nl.of(centre),
+                &prm
+            ),
+            Codim::Volume
+        );
+
+        // a volume particle squeezed between two sheets 0.3h apart → 0→1 (thin)
+        let mut x = vec![Vec3::zeros()];
+        let mut codim = vec![Codim::Volume];
+        for i in -2..=2 {
+            for j in -2..=2 {
+                for z in [-0.15 * h, 0.15 * h] {
+                    x.push(Vec3::new(i as Real * s, j as Real * s, z));
+                    codim.push(Codim::Sheet);
+                }
+            }
+        }
+        let nl = neighbor_lists(&x, h);
+        let fixed = vec![false; x.len()];
+        let f = Mat3::identity();
+        assert_eq!(
+            new_codim(0, &f, &x, &codim, &fixed, nl.of(0), &prm),
+            Codim::Sheet
+        );
+        // same sandwich, sheets 1.6 h apart: not thin, and both sides hold particles → stays volume
+        for (p, c) in x.iter_mut().zip(&codim) {
+            if *c == Codim::Sheet {
+                p.z = p.z.signum() * 0.8 * h;
+            }
+        }
+        let nl = neighbor_lists(&x, h);
+        assert_eq!(
+            new_codim(0, &f, &x, &codim, &fixed, nl.of(0), &prm),
+            Codim::Volume
+        );
+    }
+
+    #[test]
+    fn lone_filament_particle_becomes_point_fixed_never_changes() {
+        let h = 0.1;
+        let x = vec![
+            Vec3::zeros(),
+            Vec3::new(0.05, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+        ];
+        let mut codim = vec![Codim::Filament; 3];
+        let frames = vec![Mat3::identity(); 3];
+        let nl = neighbor_lists(&x, h);
+        let n = update_codims(
+            &x,
+            &mut codim,
+            &[false, false, false],
+            &frames,
+            |i| nl.of(i),
+            &TransitionParams::paper(h),
+        );
+        assert_eq!(codim, vec![Codim::Filament, Codim::Filament, Codim::Point]);
+        assert_eq!(n.filament_to_point, 1);
+        let mut codim = vec![Codim::Filament; 3];
+        update_codims(
+            &x,
+            &mut codim,
+            &[false, false, true],
+            &frames,
+            |i| nl.of(i),
+            &TransitionParams::paper(h),
+        );
+        assert_eq!(codim[2], Codim::Filament);
+    }
+
+    #[test]
+    fn census_is_independent_of_neighbour_order() {
+        let h = 0.3;
+        let x = sheet(7, 0.1);
+        let codim = vec![Codim::Sheet; x.len()];
+        let nl = neighbor_lists(&x, h);
+        let p = 24;
+        let mut rev: Vec<u32> = nl.of(p).to_vec();
+        rev.reverse();
+        let a = cone_census(p, &Vec3::x(), 0.5, h, &x, &codim, nl.of(p));
+        let b = cone_census(p, &Vec3::x(), 0.5, h, &x, &codim, &rev);
+        assert_eq!(a.plus, b.plus);
+        assert_eq!(a.minus, b.minus);
+    }
+}
