@@ -7,6 +7,7 @@
 pub mod math;
 pub mod neighbors;
 pub mod particles;
+pub mod reseed;
 pub mod transition;
 
 pub use math::{Real, Vec3};
