@@ -1,0 +1,146 @@
+//! Preconditioners: ILU(0) (incomplete LU with the sparsity of A, Saad,
+//! *Iterative Methods for Sparse Linear Systems*, Alg. 10.4), Jacobi and
+//! the identity.
+
+use super::{Csr, SolveError};
+
+/// z ≈ A⁻¹ r.
+pub trait Preconditioner: Sync {
+    /// Applies the preconditioner.
+    fn apply(&self, r: &[f64], z: &mut [f64]);
+}
+
+/// No preconditioning.
+pub struct Identity;
+
+impl Preconditioner for Identity {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        z.copy_from_slice(r);
+    }
+}
+
+/// Diagonal scaling.
+pub struct Jacobi {
+    inv_diag: Vec<f64>,
+}
+
+impl Jacobi {
+    /// Builds from the diagonal of `a`; a zero diagonal entry is an error.
+    pub fn new(a: &Csr) -> Result<Jacobi, SolveError> {
+        let mut inv_diag = vec![0.0; a.nrows];
+        for (i, d) in inv_diag.iter_mut().enumerate() {
+            let v = (a.row_ptr[i]..a.row_ptr[i + 1])
+                .find(|&k| a.col[k] == i)
+                .map(|k| a.val[k])
+                .unwrap_or(0.0);
+            if v == 0.0 || !v.is_finite() {
+                return Err(SolveError::ZeroPivot { row: i });
+            }
+            *d = 1.0 / v;
+        }
+        Ok(Jacobi { inv_diag })
+    }
+}
+
+impl Preconditioner for Jacobi {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        for ((zi, ri), di) in z.iter_mut().zip(r).zip(&self.inv_diag) {
+            *zi = ri * di;
+        }
+    }
+}
+
+/// ILU(0) factors stored in A's pattern: the strictly lower part holds L
+/// (unit diagonal implied), the rest holds U. Column indices in each row must
+/// be sorted (faer's are).
+pub struct Ilu0 {
+    row_ptr: Vec<usize>,
+    col: Vec<usize>,
+    val: Vec<f64>,
+    diag: Vec<usize>,
+}
+
+impl Ilu0 {
+    /// Factorises `a`. A zero or missing pivot is reported with its row.
+    pub fn new(a: &Csr) -> Result<Ilu0, SolveError> {
+        let n = a.nrows;
+        if a.ncols != n {
+            return Err(SolveError::Dimension(format!(
+                "ILU(0) of a {}×{} matrix",
+                a.nrows, a.ncols
+            )));
+        }
+        let row_ptr = a.row_ptr.to_vec();
+        let col = a.col.to_vec();
+        let mut val = a.val.to_vec();
+        let mut diag = vec![usize::MAX; n];
+        for i in 0..n {
+            for k in row_ptr[i]..row_ptr[i + 1] {
+                if col[k] == i {
+                    diag[i] = k;
+                }
+            }
+            if diag[i] == usize::MAX {
+                return Err(SolveError::ZeroPivot { row: i });
+            }
+        }
+        // position of column j in the current row i, via a dense marker
+        let mut pos = vec![usize::MAX; n];
+        for i in 0..n {
+            let (s, e) = (row_ptr[i], row_ptr[i + 1]);
+            for k in s..e {
+                pos[col[k]] = k;
+            }
+            for k in s..e {
+                let j = col[k];
+                if j >= i {
+                    break;
+                }
+                let piv = val[diag[j]];
+                let lij = val[k] / piv;
+                val[k] = lij;
+                for kk in diag[j] + 1..row_ptr[j + 1] {
+                    let p = pos[col[kk]];
+                    if p != usize::MAX {
+                        val[p] -= lij * val[kk];
+                    }
+                }
+            }
+            for k in s..e {
+                pos[col[k]] = usize::MAX;
+            }
+            let d = val[diag[i]];
+            if d == 0.0 || !d.is_finite() {
+                return Err(SolveError::ZeroPivot { row: i });
+            }
+        }
+        Ok(Ilu0 {
+            row_ptr,
+            col,
+            val,
+            diag,
+        })
+    }
+}
+
+impl Preconditioner for Ilu0 {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        let n = r.len();
+        // L y = r (unit lower)
+        for i in 0..n {
+            let mut acc = r[i];
+            for k in self.row_ptr[i]..self.diag[i] {
+                acc -= self.val[k] * z[self.col[k]];
+            }
+            z[i] = acc;
+        }
+        // U z = y
+        for i in (0..n).rev() {
+            let mut acc = z[i];
+            for k in self.diag[i] + 1..self.row_ptr[i + 1] {
+                acc -= self.val[k] * z[self.col[k]];
+            }
+            z[i] = acc / self.val[self.diag[i]];
+        }
+    }
+}
