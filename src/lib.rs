@@ -10,6 +10,7 @@ pub mod math;
 pub mod neighbors;
 pub mod particles;
 pub mod reseed;
+pub mod tension;
 pub mod transition;
 
 pub use math::{Real, Vec3};
