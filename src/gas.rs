@@ -1,0 +1,220 @@
+//! Enclosed gas of closed films (bubbles) and wind on films.
+//!
+//! The paper's bubbles (Figs. 2, 9) do not say how a closed film keeps its
+//! volume; without it surface tension alone collapses a soap bubble (the
+//! Laplace pressure 4σ/R is unbalanced). codimfx gives each closed film an
+//! isothermal ideal gas: p_in V = p_0 V_0, with V the volume the film
+//! encloses and p_0 the pressure at which the rest volume V_0 is in balance
+//! (p_0 − p_atm = 4σ/R_0 for a sphere of radius R_0, both faces). The
+//! excess pressure acts on each sheet particle along its outward normal:
+//! f_i = (p_in − p_atm) A_i n_i, with A_i the one-face Voronoi area.
+//!
+//! Volume (divergence theorem): V = ⅓ Σ A_i (x_i − c)·n_i over the film's
+//! sheet particles with outward unit normals n_i and any reference point c.
+//! PCA normals (b³) have no sign; [`orient_normals`] makes them consistent by
+//! a breadth-first walk over the neighbour graph, starting from the particle
+//! farthest from the centroid, whose outward direction is certain.
+//!
+//! Wind: a sheet particle in a wind of velocity w feels the normal drag
+//! f = c ρ_air A ((w − u)·n) |(w − u)·n| n (both faces), with a user drag
+//! coefficient c — the membrane is pushed along its normal, as in the
+//! blowing-bubble scene (Fig. 2).
+
+use crate::math::{Real, Vec3};
+use std::collections::VecDeque;
+
+/// Flips the given unit normals so that neighbouring ones agree and the
+/// normal of the particle farthest from the centroid points away from it.
+/// `nbrs(i)` lists the film neighbours of particle i (indices into `x`).
+/// Returns the number of connected components found.
+pub fn orient_normals<'a>(
+    x: &[Vec3],
+    normals: &mut [Vec3],
+    nbrs: impl Fn(usize) -> &'a [u32],
+) -> usize {
+    let n = x.len();
+    if n == 0 {
+        return 0;
+    }
+    let mut done = vec![false; n];
+    let mut components = 0;
+    let mut queue = VecDeque::new();
+    loop {
+        // seed: the farthest not-yet-oriented particle from the centroid of the rest
+        let rest: Vec<usize> = (0..n).filter(|&i| !done[i]).collect();
+        if rest.is_empty() {
+            break;
+        }
+        let c: Vec3 = rest.iter().map(|&i| x[i]).sum::<Vec3>() / rest.len() as Real;
+        let seed = *rest
+            .iter()
+            .max_by(|&&a, &&b| {
+                (x[a] - c)
+                    .norm_squared()
+                    .partial_cmp(&(x[b] - c).norm_squared())
+                    .unwrap()
+                    .then(b.cmp(&a))
+            })
+            .unwrap();
+        if normals[seed].dot(&(x[seed] - c)) < 0.0 {
+            normals[seed] = -normals[seed];
+        }
+        done[seed] = true;
+        queue.push_back(seed);
+        components += 1;
+        while let Some(i) = queue.pop_front() {
+            for &j in nbrs(i) {
+                let j = j as usize;
+                if !done[j] {
+                    if normals[j].dot(&normals[i]) < 0.0 {
+                        normals[j] = -normals[j];
+                    }
+                    done[j] = true;
+                    queue.push_back(j);
+                }
+            }
+        }
+    }
+    components
+}
+
+/// Enclosed volume ⅓ Σ A_i (x_i − c)·n_i with outward normals.
+pub fn enclosed_volume(x: &[Vec3], normals: &[Vec3], area: &[Real]) -> Real {
+    if x.is_empty() {
+        return 0.0;
+    }
+    let c: Vec3 = x.iter().sum::<Vec3>() / x.len() as Real;
+    x.iter()
+        .zip(normals)
+        .zip(area)
+        .map(|((p, n), a)| a * (p - c).dot(n))
+        .sum::<Real>()
+        / 3.0
+}
+
+/// An isothermal gas pocket enclosed by a film.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GasPocket {
+    /// Rest volume V_0 (m³).
+    pub v0: Real,
+    /// Excess pressure at the rest volume, p_0 − p_atm (Pa).
+    pub dp0: Real,
+    /// Ambient pressure p_atm (Pa).
+    pub p_atm: Real,
+}
+
+impl GasPocket {
+    /// A pocket in balance with a spherical film of radius `r0` and tension
+    /// `sigma` (two faces: Δp = 4σ/R), at ambient pressure `p_atm`.
+    pub fn balanced_sphere(r0: Real, sigma: Real, p_atm: Real) -> GasPocket {
+        GasPocket {
+            v0: 4.0 / 3.0 * std::f64::consts::PI * r0.powi(3),
+            dp0: 4.0 * sigma / r0,
+            p_atm,
+        }
+    }
+
+    /// Excess pressure p_in − p_atm at volume `v` (isothermal: p V = const).
+    pub fn excess_pressure(&self, v: Real) -> Real {
+        if v <= 0.0 {
+            return self.dp0;
+        }
+        (self.p_atm + self.dp0) * self.v0 / v - self.p_atm
+    }
+}
+
+/// Pressure forces (N) on the film particles: excess pressure × area along the outward normal.
+pub fn pressure_forces(normals: &[Vec3], area: &[Real], excess_pressure: Real) -> Vec<Vec3> {
+    normals
+        .iter()
+        .zip(area)
+        .map(|(n, a)| n * (excess_pressure * a))
+        .collect()
+}
+
+/// Normal wind drag on a film particle (N); see the module doc.
+pub fn wind_force(
+    wind: &Vec3,
+    u: &Vec3,
+    normal: &Vec3,
+    area: Real,
+    rho_air: Real,
+    drag: Real,
+) -> Vec3 {
+    let rel = (wind - u).dot(normal);
+    normal * (drag * rho_air * area * rel * rel.abs())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neighbors::neighbor_lists;
+
+    fn golden_sphere(n: usize, r: Real) -> Vec<Vec3> {
+        let ga = std::f64::consts::PI * (3.0 - (5.0 as Real).sqrt());
+        (0..n)
+            .map(|i| {
+                let z = 1.0 - 2.0 * (i as Real + 0.5) / n as Real;
+                let rho = (1.0 - z * z).sqrt();
+                let t = ga * i as Real;
+                Vec3::new(r * rho * t.cos(), r * rho * t.sin(), r * z) + Vec3::new(0.3, -0.1, 2.0)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn sphere_normals_oriented_and_volume_exact_to_sampling() {
+        let (n, r) = (4000, 0.05);
+        let x = golden_sphere(n, r);
+        let c = Vec3::new(0.3, -0.1, 2.0);
+        // unsigned normals with random signs
+        let mut normals: Vec<Vec3> = x
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p - c).normalize() * if i % 3 == 0 { -1.0 } else { 1.0 })
+            .collect();
+        let nl = neighbor_lists(
+            &x,
+            3.0 * r * (4.0 * std::f64::consts::PI / n as Real).sqrt(),
+        );
+        assert_eq!(orient_normals(&x, &mut normals, |i| nl.of(i)), 1);
+        assert!(x.iter().zip(&normals).all(|(p, nn)| (p - c).dot(nn) > 0.0));
+        let area = vec![4.0 * std::f64::consts::PI * r * r / n as Real; n];
+        let v = enclosed_volume(&x, &normals, &area);
+        let exact = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        assert!((v - exact).abs() < 1e-3 * exact, "{v} vs {exact}");
+    }
+
+    #[test]
+    fn isothermal_gas_balances_and_resists() {
+        let g = GasPocket::balanced_sphere(0.05, 0.01, 101_325.0);
+        assert!((g.excess_pressure(g.v0) - 0.8).abs() < 1e-9);
+        // compressed to half the volume: pressure roughly doubles (absolute)
+        let dp = g.excess_pressure(0.5 * g.v0);
+        assert!((dp + g.p_atm - 2.0 * (g.p_atm + 0.8)).abs() < 1e-6);
+        let f = pressure_forces(&[Vec3::x()], &[2.0], 3.0);
+        assert_eq!(f[0], Vec3::new(6.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn wind_pushes_along_the_normal_only() {
+        let f = wind_force(
+            &Vec3::new(1.0, 2.0, 0.0),
+            &Vec3::zeros(),
+            &Vec3::x(),
+            0.5,
+            1.2,
+            1.0,
+        );
+        assert!((f - Vec3::new(0.6, 0.0, 0.0)).norm() < 1e-15);
+        let f = wind_force(
+            &Vec3::new(-1.0, 0.0, 0.0),
+            &Vec3::zeros(),
+            &Vec3::x(),
+            0.5,
+            1.2,
+            1.0,
+        );
+        assert!(f.x < 0.0);
+    }
+}
