@@ -5,6 +5,7 @@
 //! `docs/architecture.md` for the module map and the data flow of a step.
 
 pub mod area;
+pub mod emitter;
 pub mod gas;
 pub mod linsolve;
 pub mod math;
