@@ -5,8 +5,10 @@
 //! `docs/architecture.md` for the module map and the data flow of a step.
 
 pub mod math;
+pub mod mls;
 pub mod neighbors;
 pub mod particles;
+pub mod validate;
 
 pub use math::{Real, Vec3};
 pub use particles::{Codim, Particles};
