@@ -91,7 +91,13 @@ impl LsqFit {
     /// allowed). Returns `None` when the system is rank deficient: fewer
     /// weighted members than basis terms, or a relative pivot below
     /// `pivot_tol`.
-    pub fn new(vars: usize, order: usize, eta: &[[Real; 2]], weights: &[Real], pivot_tol: Real) -> Option<LsqFit> {
+    pub fn new(
+        vars: usize,
+        order: usize,
+        eta: &[[Real; 2]],
+        weights: &[Real],
+        pivot_tol: Real,
+    ) -> Option<LsqFit> {
         let k = n_terms(vars, order);
         let m = eta.len();
         let active = weights.iter().filter(|&&w| w > 0.0).count();
@@ -150,7 +156,25 @@ impl LsqFit {
                 a[i * k + j] = s / d;
             }
         }
-        Some(LsqFit { vars, order, k, basis, weights: weights.to_vec(), scale, chol: a })
+        Some(LsqFit {
+            vars,
+            order,
+            k,
+            basis,
+            weights: weights.to_vec(),
+            scale,
+            chol: a,
+        })
+    }
+
+    /// Basis row of member q (its monomials; entries 1.. hold η).
+    pub fn basis_row(&self, q: usize) -> &[Real] {
+        &self.basis[q * self.k..(q + 1) * self.k]
+    }
+
+    /// Weight Ψ_q of member q.
+    pub fn weight(&self, q: usize) -> Real {
+        self.weights[q]
     }
 
     /// Number of members m.
@@ -234,12 +258,18 @@ mod tests {
     fn quartic_fit_reproduces_quartic_polynomial() {
         let eta = grid_eta(6, 0.2);
         let n = eta.len() - 1;
-        let w: Vec<Real> = (0..eta.len()).map(|q| if q == 0 { 1.0 } else { 1.0 / n as Real }).collect();
+        let w: Vec<Real> = (0..eta.len())
+            .map(|q| if q == 0 { 1.0 } else { 1.0 / n as Real })
+            .collect();
         let fit = LsqFit::new(2, 4, &eta, &w, 1e-13).expect("full rank");
-        let f = |e: [Real; 2]| 0.3 - e[0] + 2.0 * e[1] * e[1] + 0.5 * e[0] * e[0] * e[0] * e[1] - e[1].powi(4);
+        let f = |e: [Real; 2]| {
+            0.3 - e[0] + 2.0 * e[1] * e[1] + 0.5 * e[0] * e[0] * e[0] * e[1] - e[1].powi(4)
+        };
         let vals: Vec<Real> = eta.iter().map(|&e| f(e)).collect();
         let c = fit.coefficients(&vals);
-        let expect = [0.3, -1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, -1.0];
+        let expect = [
+            0.3, -1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, -1.0,
+        ];
         for (a, b) in c.iter().zip(expect) {
             assert!((a - b).abs() < 1e-10, "{c:?}");
         }

@@ -82,12 +82,19 @@ pub fn pca_frame(center: &Vec3, others: impl Iterator<Item = Vec3>, h: Real) -> 
 pub fn frame_from_covariance(cov: Mat3) -> Frame {
     let cov = 0.5 * (cov + cov.transpose());
     if !cov.iter().all(|v| v.is_finite()) {
-        return Frame { axes: Mat3::identity(), eigenvalues: [0.0; 3] };
+        return Frame {
+            axes: Mat3::identity(),
+            eigenvalues: [0.0; 3],
+        };
     }
     let eig = nalgebra::SymmetricEigen::new(cov);
     let mut idx = [0usize, 1, 2];
     // descending; ties broken by index so the result is deterministic
-    idx.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]).then(a.cmp(&b)));
+    idx.sort_by(|&a, &b| {
+        eig.eigenvalues[b]
+            .total_cmp(&eig.eigenvalues[a])
+            .then(a.cmp(&b))
+    });
     let b1: Vec3 = eig.eigenvectors.column(idx[0]).into_owned();
     let b2: Vec3 = eig.eigenvectors.column(idx[1]).into_owned();
     let b3 = b1.cross(&b2);
@@ -97,7 +104,10 @@ pub fn frame_from_covariance(cov: Mat3) -> Frame {
         eig.eigenvalues[idx[1]].max(0.0),
         eig.eigenvalues[idx[2]].max(0.0),
     ];
-    Frame { axes, eigenvalues: ev }
+    Frame {
+        axes,
+        eigenvalues: ev,
+    }
 }
 
 #[cfg(test)]
@@ -125,7 +135,9 @@ mod tests {
     fn line_frame_has_tangent_first() {
         let t = Vec3::new(0.0, 3.0, 4.0).normalize();
         let c = Vec3::new(1.0, 1.0, 1.0);
-        let pts = (-4..=4).filter(|&i| i != 0).map(|i| c + 0.02 * i as Real * t);
+        let pts = (-4..=4)
+            .filter(|&i| i != 0)
+            .map(|i| c + 0.02 * i as Real * t);
         let f = pca_frame(&c, pts, 0.1);
         assert!((f.axis(0).dot(&t).abs() - 1.0).abs() < 1e-12);
     }

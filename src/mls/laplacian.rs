@@ -43,7 +43,10 @@ pub struct JointLaplacian {
 }
 
 /// Per-particle Laplacian rows (columns sorted, self included), in parallel.
-pub fn laplacian_rows(nb: &Neighborhoods, params: &MlsParams) -> Result<(Vec<Vec<(usize, Real)>>, FitStats), MlsError> {
+pub fn laplacian_rows(
+    nb: &Neighborhoods,
+    params: &MlsParams,
+) -> Result<(Vec<Vec<(usize, Real)>>, FitStats), MlsError> {
     params.validate()?;
     let frames = par_frames(nb, params);
     let christoffel = params.christoffel;
@@ -61,7 +64,11 @@ impl JointLaplacian {
     pub fn assemble(nb: &Neighborhoods, params: &MlsParams) -> Result<JointLaplacian, MlsError> {
         let (rows, stats) = laplacian_rows(nb, params)?;
         let matrix = csr_from_rows(nb.len(), nb.len(), rows)?;
-        Ok(JointLaplacian { n_sheet: nb.n_sheet, matrix, stats })
+        Ok(JointLaplacian {
+            n_sheet: nb.n_sheet,
+            matrix,
+            stats,
+        })
     }
 
     /// Number of rows (= columns).
@@ -156,7 +163,11 @@ pub fn csr_from_rows(
     rows: Vec<Vec<(usize, Real)>>,
 ) -> Result<SparseRowMat<usize, Real>, MlsError> {
     if rows.len() != nrows {
-        return Err(MlsError::Length { what: "rows", got: rows.len(), expected: nrows });
+        return Err(MlsError::Length {
+            what: "rows",
+            got: rows.len(),
+            expected: nrows,
+        });
     }
     let nnz: usize = rows.iter().map(|r| r.len()).sum();
     let mut row_ptr = Vec::with_capacity(nrows + 1);
@@ -166,7 +177,9 @@ pub fn csr_from_rows(
     for (i, r) in rows.into_iter().enumerate() {
         for (c, x) in r {
             if c >= ncols || col_idx.len() > row_ptr[i] && *col_idx.last().unwrap() >= c {
-                return Err(MlsError::Sparse(format!("row {i}: column {c} out of order or out of range")));
+                return Err(MlsError::Sparse(format!(
+                    "row {i}: column {c} out of order or out of range"
+                )));
             }
             col_idx.push(c);
             val.push(x);

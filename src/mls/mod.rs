@@ -22,6 +22,15 @@
 //! lowered until the fit is full rank (down to 2, the least that defines a
 //! Laplacian); if even that fails the particle gets no operator row (its
 //! Laplacian is zero). Both are counted in [`FitStats`].
+//!
+//! Boundaries (open filament ends, sheet edges without rim): a one-sided
+//! MLS Laplacian extrapolates and makes L unstable (measured: the open tail
+//! tips of the butterfly case gave eigenvalues up to +62). A particle whose
+//! neighbours' mean tangential offset exceeds `boundary_offset`·h gets the
+//! boundary row Δs ≈ (2k / m₂) Σ_q Ψ_q (s_q − s_p) / Σ_q Ψ_q (k = 1 or 2
+//! intrinsic dimensions, m₂ the Ψ-weighted mean squared tangential
+//! distance): exact for |ξ|² on symmetric neighbourhoods, non-negative
+//! off-diagonals, a zero-flux (Neumann-like) end. Counted in [`FitStats`].
 
 pub mod fit;
 pub mod frame;
@@ -66,6 +75,11 @@ pub struct MlsParams {
     /// a filament particle's fit (dimensionless; 0.25 for diffusion as the
     /// paper says, 0 for rim particles under surface tension, §7).
     pub sheet_weight_in_filament: Real,
+    /// Boundary detection (relative to h): a particle whose neighbours'
+    /// weighted mean tangential offset exceeds this is a boundary particle
+    /// (open filament end, sheet edge) and gets the boundary row instead of
+    /// the MLS Laplace–Beltrami row (see [`operators`]). Default 0.25.
+    pub boundary_offset: Real,
     /// Smallest accepted pivot of the equilibrated normal matrix
     /// (dimensionless); below it the fit counts as rank deficient.
     pub pivot_tol: Real,
@@ -81,6 +95,7 @@ impl MlsParams {
             weighting: Weighting::Paper,
             filament_weight_in_sheet: 1.0,
             sheet_weight_in_filament: 0.25,
+            boundary_offset: 0.25,
             pivot_tol: 1e-12,
         }
     }
@@ -88,13 +103,21 @@ impl MlsParams {
     /// The operator exactly as the paper writes it: quadratic fit, eq. 32
     /// weights, metric-derivative term dropped (eq. 7c, 8c).
     pub fn paper(h: Real) -> MlsParams {
-        MlsParams { order: 2, christoffel: false, ..MlsParams::new(h) }
+        MlsParams {
+            order: 2,
+            christoffel: false,
+            ..MlsParams::new(h)
+        }
     }
 
     /// Checks every field once; the error names the field and the reason.
     pub fn validate(&self) -> Result<(), MlsError> {
         let bad = |field: &'static str, value: Real, reason: &'static str| {
-            Err(MlsError::InvalidParam { field, value, reason })
+            Err(MlsError::InvalidParam {
+                field,
+                value,
+                reason,
+            })
         };
         if !(self.h > 0.0 && self.h.is_finite()) {
             return bad("h", self.h, "must be positive and finite");
@@ -109,6 +132,13 @@ impl MlsParams {
             if !(v >= 0.0 && v.is_finite()) {
                 return bad(f, v, "must be finite and non-negative");
             }
+        }
+        if !(self.boundary_offset > 0.0 && self.boundary_offset.is_finite()) {
+            return bad(
+                "boundary_offset",
+                self.boundary_offset,
+                "must be positive and finite",
+            );
         }
         if !(self.pivot_tol > 0.0 && self.pivot_tol < 1.0) {
             return bad("pivot_tol", self.pivot_tol, "must lie in (0, 1)");
@@ -126,6 +156,8 @@ pub struct FitStats {
     pub full_order: usize,
     /// Particles whose fit fell back to a lower order (still ≥ 2).
     pub lowered_order: usize,
+    /// Of the fitted particles, boundary particles given the boundary row.
+    pub boundary: usize,
     /// Particles with no operator row: no order ≥ 2 was full rank.
     pub no_row: usize,
     /// Of `no_row`, particles without any neighbour.
@@ -139,6 +171,7 @@ impl FitStats {
             particles: self.particles + o.particles,
             full_order: self.full_order + o.full_order,
             lowered_order: self.lowered_order + o.lowered_order,
+            boundary: self.boundary + o.boundary,
             no_row: self.no_row + o.no_row,
             isolated: self.isolated + o.isolated,
         }

@@ -56,10 +56,18 @@ impl Neighborhoods {
     /// neighbours within `h`. Volume and point particles are left out.
     pub fn build(x: &[Vec3], codim: &[Codim], h: Real) -> Result<Neighborhoods, MlsError> {
         if codim.len() != x.len() {
-            return Err(MlsError::Length { what: "codim", got: codim.len(), expected: x.len() });
+            return Err(MlsError::Length {
+                what: "codim",
+                got: codim.len(),
+                expected: x.len(),
+            });
         }
         if !(h > 0.0 && h.is_finite()) {
-            return Err(MlsError::InvalidParam { field: "h", value: h, reason: "must be positive and finite" });
+            return Err(MlsError::InvalidParam {
+                field: "h",
+                value: h,
+                reason: "must be positive and finite",
+            });
         }
         if let Some(i) = x.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(MlsError::NonFinite { index: i });
@@ -69,7 +77,12 @@ impl Neighborhoods {
         store.extend((0..x.len()).filter(|&i| codim[i] == Codim::Filament));
         let xj: Vec<Vec3> = store.iter().map(|&i| x[i]).collect();
         let lists = neighbor_lists(&xj, h);
-        Ok(Neighborhoods { store, n_sheet, x: xj, lists })
+        Ok(Neighborhoods {
+            store,
+            n_sheet,
+            x: xj,
+            lists,
+        })
     }
 
     /// All particles are sheet particles (in the given order).
@@ -120,6 +133,8 @@ pub struct LocalFit {
     /// Second derivatives: (F_11, F_12, F_22) on a sheet, (F₂'', F₃'', 0)
     /// on a filament (scaled coordinates).
     pub second: [Real; 3],
+    /// One-sided neighbourhood: the Laplacian uses the boundary row.
+    pub boundary: bool,
 }
 
 /// Result of fitting one particle.
@@ -146,10 +161,19 @@ impl FitOutcome {
     }
 
     fn stats(&self) -> FitStats {
-        let mut s = FitStats { particles: 1, ..FitStats::default() };
+        let mut s = FitStats {
+            particles: 1,
+            ..FitStats::default()
+        };
         match self {
-            FitOutcome::Full(_) => s.full_order = 1,
-            FitOutcome::Lowered(_) => s.lowered_order = 1,
+            FitOutcome::Full(f) => {
+                s.full_order = 1;
+                s.boundary = usize::from(f.boundary);
+            }
+            FitOutcome::Lowered(f) => {
+                s.lowered_order = 1;
+                s.boundary = usize::from(f.boundary);
+            }
             FitOutcome::NoRow { isolated } => {
                 s.no_row = 1;
                 s.isolated = usize::from(*isolated);
@@ -196,7 +220,10 @@ pub fn particle_frame(nb: &Neighborhoods, p: usize, params: &MlsParams) -> Frame
 
 /// Frames of all joint particles, in parallel (deterministic).
 pub fn par_frames(nb: &Neighborhoods, params: &MlsParams) -> Vec<Frame> {
-    (0..nb.len()).into_par_iter().map(|p| particle_frame(nb, p, params)).collect()
+    (0..nb.len())
+        .into_par_iter()
+        .map(|p| particle_frame(nb, p, params))
+        .collect()
 }
 
 /// Fits the neighbourhood of joint particle `p` in the given frame, lowering
@@ -230,8 +257,19 @@ pub fn fit_particle(nb: &Neighborhoods, p: usize, frame: &Frame, params: &MlsPar
                 (Codim::Filament, Codim::Sheet) => params.sheet_weight_in_filament,
                 _ => 1.0,
             };
-            let g = if in_geometry(nb, p, q, params) { base * cross } else { 0.0 };
-            (base * cross, if cp == Codim::Filament { g } else { base * cross })
+            let g = if in_geometry(nb, p, q, params) {
+                base * cross
+            } else {
+                0.0
+            };
+            (
+                base * cross,
+                if cp == Codim::Filament {
+                    g
+                } else {
+                    base * cross
+                },
+            )
         };
         if cp == Codim::Sheet {
             eta.push([l.x, l.y]);
@@ -244,6 +282,14 @@ pub fn fit_particle(nb: &Neighborhoods, p: usize, frame: &Frame, params: &MlsPar
         w_geom.push(wg);
     }
     let vars = if cp == Codim::Sheet { 2 } else { 1 };
+    // boundary test: Ψ-weighted mean tangential offset of the neighbours
+    let (mut c1, mut c2, mut wsum) = (0.0, 0.0, 0.0);
+    for (e, w) in eta.iter().zip(&w_field).skip(1) {
+        c1 += w * e[0];
+        c2 += w * e[1];
+        wsum += w;
+    }
+    let boundary = wsum > 0.0 && (c1 * c1 + c2 * c2).sqrt() / wsum > params.boundary_offset;
     let separate_geometry = w_field != w_geom;
     for order in (2..=params.order).rev() {
         let Some(field) = LsqFit::new(vars, order, &eta, &w_field, params.pivot_tol) else {
@@ -269,8 +315,22 @@ pub fn fit_particle(nb: &Neighborhoods, p: usize, frame: &Frame, params: &MlsPar
             let c3 = g.coefficients(&height.iter().map(|v| v[1]).collect::<Vec<_>>());
             ([c2[1], c3[1]], [2.0 * c2[2], 2.0 * c3[2], 0.0])
         };
-        let fit = LocalFit { center: p, codim: cp, frame: *frame, members, h, field, slope, second };
-        return if order == params.order { FitOutcome::Full(fit) } else { FitOutcome::Lowered(fit) };
+        let fit = LocalFit {
+            center: p,
+            codim: cp,
+            frame: *frame,
+            members,
+            h,
+            field,
+            slope,
+            second,
+            boundary,
+        };
+        return if order == params.order {
+            FitOutcome::Full(fit)
+        } else {
+            FitOutcome::Lowered(fit)
+        };
     }
     FitOutcome::NoRow { isolated: false }
 }
@@ -323,7 +383,10 @@ impl LocalFit {
     pub fn tangents(&self) -> [Vec3; 2] {
         let [a, b] = self.slope;
         if self.codim == Codim::Sheet {
-            [self.frame.to_world(&Vec3::new(1.0, 0.0, a)), self.frame.to_world(&Vec3::new(0.0, 1.0, b))]
+            [
+                self.frame.to_world(&Vec3::new(1.0, 0.0, a)),
+                self.frame.to_world(&Vec3::new(0.0, 1.0, b)),
+            ]
         } else {
             [self.frame.to_world(&Vec3::new(1.0, a, b)), Vec3::zeros()]
         }
@@ -363,12 +426,46 @@ impl LocalFit {
         d
     }
 
-    /// Laplace–Beltrami weights r_q over the members: Δs_p = Σ_q r_q s_q (1/m²).
+    /// Laplace–Beltrami weights r_q over the members: Δs_p = Σ_q r_q s_q
+    /// (1/m²); the boundary row (module docs of [`super`]) for a boundary particle.
     pub fn laplacian_row(&self, christoffel: bool) -> Vec<Real> {
         let inv_h2 = 1.0 / (self.h * self.h);
-        let mut r = self.field.functional_row(&self.laplacian_functional(christoffel));
+        if self.boundary {
+            return self.boundary_row();
+        }
+        let mut r = self
+            .field
+            .functional_row(&self.laplacian_functional(christoffel));
         r.iter_mut().for_each(|v| *v *= inv_h2);
         r
+    }
+
+    /// The boundary row: Δs ≈ (2k/m₂) Σ_q Ψ_q (s_q − s_p) / Σ_q Ψ_q (1/m²).
+    pub fn boundary_row(&self) -> Vec<Real> {
+        let m = self.field.members();
+        let dims = if self.codim == Codim::Sheet { 2.0 } else { 1.0 };
+        let (mut wsum, mut m2) = (0.0, 0.0);
+        for q in 1..m {
+            let b = self.field.basis_row(q);
+            let r2 = if self.codim == Codim::Sheet {
+                b[1] * b[1] + b[2] * b[2]
+            } else {
+                b[1] * b[1]
+            };
+            let w = self.field.weight(q);
+            wsum += w;
+            m2 += w * r2;
+        }
+        let mut row = vec![0.0; m];
+        if wsum <= 0.0 || m2 <= 0.0 {
+            return row;
+        }
+        let c = 2.0 * dims / (m2 / wsum) / (self.h * self.h) / wsum;
+        for (q, r) in row.iter_mut().enumerate().skip(1) {
+            *r = c * self.field.weight(q);
+        }
+        row[0] = -row[1..].iter().sum::<Real>();
+        row
     }
 
     /// Surface gradient of a scalar given its member values (eq. 7a / 8a), world units.
@@ -387,7 +484,10 @@ impl LocalFit {
     /// Surface divergence of a vector field given its member values (world
     /// vectors): g^{kl} t_k · ∂_l v (eq. 7b / 8b), world units.
     pub fn divergence(&self, values: &[Vec3]) -> Real {
-        let comp = |i: usize| self.field.coefficients(&values.iter().map(|v| v[i]).collect::<Vec<_>>());
+        let comp = |i: usize| {
+            self.field
+                .coefficients(&values.iter().map(|v| v[i]).collect::<Vec<_>>())
+        };
         let (cx, cy, cz) = (comp(0), comp(1), comp(2));
         let dv = |l: usize| Vec3::new(cx[l], cy[l], cz[l]);
         let [t1, t2] = self.tangents();
@@ -403,20 +503,31 @@ impl LocalFit {
 
     /// Number of basis terms of the field fit.
     pub fn terms(&self) -> usize {
-        n_terms(if self.codim == Codim::Sheet { 2 } else { 1 }, self.field.order)
+        n_terms(
+            if self.codim == Codim::Sheet { 2 } else { 1 },
+            self.field.order,
+        )
     }
 }
 
 /// Surface gradients of a joint-indexed scalar field (zero where no fit).
 pub fn par_gradients(nb: &Neighborhoods, params: &MlsParams, s: &[Real]) -> (Vec<Vec3>, FitStats) {
     let frames = par_frames(nb, params);
-    par_fit_map(nb, &frames, params, |_, f| f.map_or(Vec3::zeros(), |f| f.gradient(&f.gather(s))))
+    par_fit_map(nb, &frames, params, |_, f| {
+        f.map_or(Vec3::zeros(), |f| f.gradient(&f.gather(s)))
+    })
 }
 
 /// Surface divergences of a joint-indexed vector field (zero where no fit).
-pub fn par_divergences(nb: &Neighborhoods, params: &MlsParams, v: &[Vec3]) -> (Vec<Real>, FitStats) {
+pub fn par_divergences(
+    nb: &Neighborhoods,
+    params: &MlsParams,
+    v: &[Vec3],
+) -> (Vec<Real>, FitStats) {
     let frames = par_frames(nb, params);
     par_fit_map(nb, &frames, params, |_, f| {
-        f.map_or(0.0, |f| f.divergence(&f.members.iter().map(|&q| v[q as usize]).collect::<Vec<_>>()))
+        f.map_or(0.0, |f| {
+            f.divergence(&f.members.iter().map(|&q| v[q as usize]).collect::<Vec<_>>())
+        })
     })
 }

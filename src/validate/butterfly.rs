@@ -52,7 +52,7 @@ pub struct ButterflyReport {
     /// (end − start) / start.
     pub heat_drift: Real,
     /// Minimum over all particles and steps.
-    pub min_end: Real,
+    pub min_all: Real,
     /// Maximum at the end.
     pub max_end: Real,
     /// Largest excursion outside [0, 1] over all steps.
@@ -135,16 +135,27 @@ impl Butterfly {
     pub fn run(&self) -> Result<ButterflyReport, ValidateError> {
         let start = Instant::now();
         if !(self.spacing > 0.005 && self.spacing < 0.5) {
-            return Err(ValidateError::Param { what: "spacing", value: self.spacing, reason: "must lie in (0.005, 0.5)" });
+            return Err(ValidateError::Param {
+                what: "spacing",
+                value: self.spacing,
+                reason: "must lie in (0.005, 0.5)",
+            });
         }
         if self.steps == 0 {
-            return Err(ValidateError::Param { what: "steps", value: 0.0, reason: "must be at least 1" });
+            return Err(ValidateError::Param {
+                what: "steps",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
         }
         let (x, c) = butterfly_particles(self.spacing);
         let nb = Neighborhoods::build(&x, &c, self.mls.h)?;
         let l = JointLaplacian::assemble(&nb, &self.mls)?;
         let lu = ShiftedLu::new(&l, self.dt)?;
-        let mut s: Vec<Real> = nb.x.iter().map(|p| if p.xy().norm() < 0.15 { 1.0 } else { 0.0 }).collect();
+        let mut s: Vec<Real> =
+            nb.x.iter()
+                .map(|p| if p.xy().norm() < 0.15 { 1.0 } else { 0.0 })
+                .collect();
         let heat_start: Real = s.iter().sum();
         let mut violation: Real = 0.0;
         let mut min_all = Real::INFINITY;
@@ -169,7 +180,7 @@ impl Butterfly {
             heat_start,
             heat_end,
             heat_drift: (heat_end - heat_start) / heat_start,
-            min_end: min_all,
+            min_all,
             max_end,
             max_principle_violation: violation.max(0.0),
             heated_fraction: heated,

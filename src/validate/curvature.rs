@@ -37,8 +37,13 @@ pub enum CurvatureShape {
 
 impl CurvatureShape {
     /// All shapes.
-    pub const ALL: [CurvatureShape; 5] =
-        [CurvatureShape::Sphere, CurvatureShape::Torus, CurvatureShape::Cylinder, CurvatureShape::Circle, CurvatureShape::Helix];
+    pub const ALL: [CurvatureShape; 5] = [
+        CurvatureShape::Sphere,
+        CurvatureShape::Torus,
+        CurvatureShape::Cylinder,
+        CurvatureShape::Circle,
+        CurvatureShape::Helix,
+    ];
 
     fn sample(self, spacing: Real) -> (Vec<Vec3>, Codim) {
         match self {
@@ -62,9 +67,8 @@ impl CurvatureShape {
                 let n = Vec3::new(v.cos() * u.cos(), v.cos() * u.sin(), v.sin());
                 Some(-(1.0 / 0.6 + v.cos() / (1.5 + 0.6 * v.cos())) * n)
             }
-            CurvatureShape::Cylinder => {
-                (x.z.abs() < 1.5 - margin).then(|| -(1.0 / 0.6) * Vec3::new(x.x, x.y, 0.0).normalize())
-            }
+            CurvatureShape::Cylinder => (x.z.abs() < 1.5 - margin)
+                .then(|| -(1.0 / 0.6) * Vec3::new(x.x, x.y, 0.0).normalize()),
             CurvatureShape::Circle => Some(-x),
             CurvatureShape::Helix => {
                 let u = x.z / 0.3;
@@ -110,23 +114,44 @@ pub struct CurvatureStudy {
 
 /// Curvature error of `shape` at one spacing with h = `h_over_spacing`·Δ;
 /// `base` gives the other operator parameters.
-pub fn curvature_run(shape: CurvatureShape, spacing: Real, h_over_spacing: Real, base: &MlsParams) -> Result<CurvatureRun, ValidateError> {
+pub fn curvature_run(
+    shape: CurvatureShape,
+    spacing: Real,
+    h_over_spacing: Real,
+    base: &MlsParams,
+) -> Result<CurvatureRun, ValidateError> {
     if !(spacing > 0.0 && spacing.is_finite()) {
-        return Err(ValidateError::Param { what: "spacing", value: spacing, reason: "must be positive and finite" });
+        return Err(ValidateError::Param {
+            what: "spacing",
+            value: spacing,
+            reason: "must be positive and finite",
+        });
     }
-    let params = MlsParams { h: h_over_spacing * spacing, ..*base };
+    let params = MlsParams {
+        h: h_over_spacing * spacing,
+        ..*base
+    };
     params.validate()?;
     let (x, codim) = shape.sample(spacing);
     let nb = Neighborhoods::build(&x, &vec![codim; x.len()], params.h)?;
     let l = JointLaplacian::assemble(&nb, &params)?;
     let kn = l.apply_vec3(&nb.x);
-    let errs: Vec<Real> = nb
-        .x
-        .iter()
-        .zip(&kn)
-        .filter_map(|(p, k)| shape.exact(p, 2.0 * params.h).map(|e| (k - e).norm() / e.norm()))
-        .collect();
-    let max = errs.iter().fold(0.0 as Real, |a, &b| if b.is_finite() { a.max(b) } else { Real::INFINITY });
+    let errs: Vec<Real> =
+        nb.x.iter()
+            .zip(&kn)
+            .filter_map(|(p, k)| {
+                shape
+                    .exact(p, 2.0 * params.h)
+                    .map(|e| (k - e).norm() / e.norm())
+            })
+            .collect();
+    let max = errs.iter().fold(0.0 as Real, |a, &b| {
+        if b.is_finite() {
+            a.max(b)
+        } else {
+            Real::INFINITY
+        }
+    });
     let mean = errs.iter().sum::<Real>() / errs.len().max(1) as Real;
     Ok(CurvatureRun {
         particles: x.len(),
@@ -140,7 +165,12 @@ pub fn curvature_run(shape: CurvatureShape, spacing: Real, h_over_spacing: Real,
 }
 
 /// [`curvature_run`] at each spacing (coarse to fine) with observed orders.
-pub fn curvature_study(shape: CurvatureShape, spacings: &[Real], h_over_spacing: Real, base: &MlsParams) -> Result<CurvatureStudy, ValidateError> {
+pub fn curvature_study(
+    shape: CurvatureShape,
+    spacings: &[Real],
+    h_over_spacing: Real,
+    base: &MlsParams,
+) -> Result<CurvatureStudy, ValidateError> {
     let runs = spacings
         .iter()
         .map(|&s| curvature_run(shape, s, h_over_spacing, base))
@@ -148,5 +178,10 @@ pub fn curvature_study(shape: CurvatureShape, spacings: &[Real], h_over_spacing:
     let sp: Vec<Real> = runs.iter().map(|r| r.spacing).collect();
     let emax: Vec<Real> = runs.iter().map(|r| r.max_rel_error).collect();
     let emean: Vec<Real> = runs.iter().map(|r| r.mean_rel_error).collect();
-    Ok(CurvatureStudy { shape, observed_order_max: observed_orders(&sp, &emax), observed_order_mean: observed_orders(&sp, &emean), runs })
+    Ok(CurvatureStudy {
+        shape,
+        observed_order_max: observed_orders(&sp, &emax),
+        observed_order_mean: observed_orders(&sp, &emean),
+        runs,
+    })
 }

@@ -35,17 +35,29 @@ pub fn sphere_latitude(r: Real, spacing: Real, jitter: Real, seed: u64) -> Vec<V
         let phase = if i % 2 == 0 { 0.0 } else { 0.5 };
         for j in 0..ring {
             let phi = 2.0 * PI * (j as Real + phase) / ring as Real;
-            pts.push(r * Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()));
+            pts.push(
+                r * Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                ),
+            );
         }
     }
     if jitter > 0.0 {
         let mut s = seed;
         for p in pts.iter_mut() {
             let n = p.normalize();
-            let a = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+            let a = if n.x.abs() < 0.9 {
+                Vec3::x()
+            } else {
+                Vec3::y()
+            };
             let t1 = n.cross(&a).normalize();
             let t2 = n.cross(&t1);
-            let d = jitter * spacing * ((2.0 * rand01(&mut s) - 1.0) * t1 + (2.0 * rand01(&mut s) - 1.0) * t2);
+            let d = jitter
+                * spacing
+                * ((2.0 * rand01(&mut s) - 1.0) * t1 + (2.0 * rand01(&mut s) - 1.0) * t2);
             *p = r * (*p + d).normalize();
         }
     }
@@ -119,7 +131,11 @@ mod tests {
     fn appendix_f_sphere_has_expected_count_and_radius() {
         let p = sphere_latitude(1.0, 0.0205, 0.0, 1);
         // 4π/Δ² ≈ 29,900
-        assert!((p.len() as Real - 4.0 * PI / 0.0205f64.powi(2)).abs() < 300.0, "{}", p.len());
+        assert!(
+            (p.len() as Real - 4.0 * PI / 0.0205f64.powi(2)).abs() < 300.0,
+            "{}",
+            p.len()
+        );
         assert!(p.iter().all(|x| (x.norm() - 1.0).abs() < 1e-14));
         let j = sphere_latitude(1.0, 0.05, 0.2, 3);
         assert!(j.iter().all(|x| (x.norm() - 1.0).abs() < 1e-14));

@@ -15,7 +15,10 @@
 //! on (I − τL)⁻¹; a stable operator has Re λ ≤ 0 (the constant mode gives 0).
 
 use super::sampling::{sphere_latitude, sphere_spacing_for};
-use super::time::{backward_euler, crank_nicolson, forward_euler, krylov_exp_poly, rightmost_eigenvalue, rightmost_ritz, ShiftedLu};
+use super::time::{
+    backward_euler, crank_nicolson, forward_euler, krylov_exp_poly, rightmost_eigenvalue,
+    rightmost_ritz, ShiftedLu,
+};
 use super::{max_abs, observed_orders, ValidateError};
 use crate::math::Real;
 use crate::mls::{FitStats, JointLaplacian, MlsParams, Neighborhoods};
@@ -134,10 +137,18 @@ impl SphereDiffusion {
     pub fn run(&self) -> Result<SphereDiffusionReport, ValidateError> {
         let start = Instant::now();
         if self.particles < 20 {
-            return Err(ValidateError::Param { what: "particles", value: self.particles as Real, reason: "need at least 20" });
+            return Err(ValidateError::Param {
+                what: "particles",
+                value: self.particles as Real,
+                reason: "need at least 20",
+            });
         }
         if !(0.0..=0.5).contains(&self.jitter) {
-            return Err(ValidateError::Param { what: "jitter", value: self.jitter, reason: "must lie in [0, 0.5]" });
+            return Err(ValidateError::Param {
+                what: "jitter",
+                value: self.jitter,
+                reason: "must lie in [0, 0.5]",
+            });
         }
         self.mls.validate()?;
         let spacing = sphere_spacing_for(self.particles, 1.0);
@@ -214,7 +225,11 @@ pub struct Convergence {
 }
 
 /// Runs `base` at each particle count in `counts`, with h = `h_over_spacing` · Δ.
-pub fn convergence(base: &SphereDiffusion, counts: &[usize], h_over_spacing: Real) -> Result<Convergence, ValidateError> {
+pub fn convergence(
+    base: &SphereDiffusion,
+    counts: &[usize],
+    h_over_spacing: Real,
+) -> Result<Convergence, ValidateError> {
     let mut runs = Vec::new();
     for &n in counts {
         let mut c = base.clone();
@@ -225,5 +240,9 @@ pub fn convergence(base: &SphereDiffusion, counts: &[usize], h_over_spacing: Rea
     let sp: Vec<Real> = runs.iter().map(|r| r.spacing).collect();
     let emax: Vec<Real> = runs.iter().map(|r| r.spatial_max_error).collect();
     let el1: Vec<Real> = runs.iter().map(|r| r.spatial_l1_error).collect();
-    Ok(Convergence { observed_order_max: observed_orders(&sp, &emax), observed_order_l1: observed_orders(&sp, &el1), runs })
+    Ok(Convergence {
+        observed_order_max: observed_orders(&sp, &emax),
+        observed_order_l1: observed_orders(&sp, &el1),
+        runs,
+    })
 }

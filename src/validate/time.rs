@@ -87,7 +87,8 @@ impl ShiftedLu {
             }
         }
         let err = |e: String| TimeError::Lu { gamma, reason: e };
-        let a = SparseColMat::<usize, Real>::try_new_from_triplets(n, n, &t).map_err(|e| err(format!("{e:?}")))?;
+        let a = SparseColMat::<usize, Real>::try_new_from_triplets(n, n, &t)
+            .map_err(|e| err(format!("{e:?}")))?;
         let lu = a.sp_lu().map_err(|e| err(format!("{e:?}")))?;
         Ok(ShiftedLu { lu, gamma })
     }
@@ -95,7 +96,8 @@ impl ShiftedLu {
     /// Solves (I − γL) x = b in place.
     pub fn solve(&self, b: &mut [Real]) {
         let n = b.len();
-        self.lu.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
+        self.lu
+            .solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
     }
 }
 
@@ -113,7 +115,12 @@ fn steps(t: Real, dt: Real) -> usize {
 
 /// Forward Euler to time `t` with step ≈ `dt` (the step is adjusted so an
 /// integer number of steps reaches `t`).
-pub fn forward_euler(l: &JointLaplacian, s0: &[Real], t: Real, dt: Real) -> Result<Vec<Real>, TimeError> {
+pub fn forward_euler(
+    l: &JointLaplacian,
+    s0: &[Real],
+    t: Real,
+    dt: Real,
+) -> Result<Vec<Real>, TimeError> {
     check("t", t)?;
     check("dt", dt)?;
     let n = steps(t, dt);
@@ -128,7 +135,12 @@ pub fn forward_euler(l: &JointLaplacian, s0: &[Real], t: Real, dt: Real) -> Resu
 }
 
 /// Backward Euler to time `t`; also returns the LU (reusable).
-pub fn backward_euler(l: &JointLaplacian, s0: &[Real], t: Real, dt: Real) -> Result<Vec<Real>, TimeError> {
+pub fn backward_euler(
+    l: &JointLaplacian,
+    s0: &[Real],
+    t: Real,
+    dt: Real,
+) -> Result<Vec<Real>, TimeError> {
     check("t", t)?;
     check("dt", dt)?;
     let n = steps(t, dt);
@@ -141,7 +153,12 @@ pub fn backward_euler(l: &JointLaplacian, s0: &[Real], t: Real, dt: Real) -> Res
 }
 
 /// Crank–Nicolson to time `t`.
-pub fn crank_nicolson(l: &JointLaplacian, s0: &[Real], t: Real, dt: Real) -> Result<Vec<Real>, TimeError> {
+pub fn crank_nicolson(
+    l: &JointLaplacian,
+    s0: &[Real],
+    t: Real,
+    dt: Real,
+) -> Result<Vec<Real>, TimeError> {
     check("t", t)?;
     check("dt", dt)?;
     let n = steps(t, dt);
@@ -164,7 +181,11 @@ fn dot(a: &[Real], b: &[Real]) -> Real {
 /// Arnoldi with re-orthogonalised modified Gram–Schmidt on v ↦ A v given by
 /// `apply` (in place). Returns the basis and the (m+1) × m Hessenberg matrix;
 /// stops early on breakdown.
-fn arnoldi(v0: &[Real], m: usize, mut apply: impl FnMut(&mut [Real])) -> (Vec<Vec<Real>>, DMatrix<Real>) {
+fn arnoldi(
+    v0: &[Real],
+    m: usize,
+    mut apply: impl FnMut(&mut [Real]),
+) -> (Vec<Vec<Real>>, DMatrix<Real>) {
     let beta = dot(v0, v0).sqrt();
     let mut v = vec![v0.iter().map(|x| x / beta).collect::<Vec<_>>()];
     let mut h = DMatrix::zeros(m + 1, m);
@@ -190,7 +211,13 @@ fn arnoldi(v0: &[Real], m: usize, mut apply: impl FnMut(&mut [Real])) -> (Vec<Ve
 
 /// exp(tL) s₀ by shift-and-invert Krylov with shift γ (module docs).
 /// Returns the result and the Krylov dimension used.
-pub fn krylov_exp(lu: &ShiftedLu, s0: &[Real], t: Real, tol: Real, max_dim: usize) -> Result<(Vec<Real>, usize), TimeError> {
+pub fn krylov_exp(
+    lu: &ShiftedLu,
+    s0: &[Real],
+    t: Real,
+    tol: Real,
+    max_dim: usize,
+) -> Result<(Vec<Real>, usize), TimeError> {
     check("t", t)?;
     let beta = dot(s0, s0).sqrt();
     if beta == 0.0 {
@@ -244,7 +271,9 @@ pub fn krylov_exp(lu: &ShiftedLu, s0: &[Real], t: Real, tol: Real, max_dim: usiz
 /// (the dominant half by |μ|).
 pub fn rightmost_eigenvalue(lu: &ShiftedLu, n: usize, m: usize, seed: u64) -> (Real, Real) {
     let mut s = seed;
-    let v0: Vec<Real> = (0..n).map(|_| super::sampling::rand01(&mut s) - 0.5).collect();
+    let v0: Vec<Real> = (0..n)
+        .map(|_| super::sampling::rand01(&mut s) - 0.5)
+        .collect();
     let (_, h) = arnoldi(&v0, m, |w| lu.solve(w));
     let k = h.ncols();
     let hm = h.view((0, 0), (k, k)).into_owned();
@@ -259,12 +288,21 @@ pub fn rightmost_eigenvalue(lu: &ShiftedLu, n: usize, m: usize, seed: u64) -> (R
             let lam = (nalgebra::Complex::new(1.0, 0.0) - mu.inv()) / tau;
             (lam.re, lam.im)
         })
-        .fold((Real::NEG_INFINITY, 0.0), |a, b| if b.0 > a.0 { b } else { a })
+        .fold(
+            (Real::NEG_INFINITY, 0.0),
+            |a, b| if b.0 > a.0 { b } else { a },
+        )
 }
 
 /// exp(tL) s₀ by polynomial Krylov with sub-steps (module docs). Returns the
 /// result and the total number of matrix–vector products.
-pub fn krylov_exp_poly(l: &JointLaplacian, s0: &[Real], t: Real, tol: Real, m_max: usize) -> Result<(Vec<Real>, usize), TimeError> {
+pub fn krylov_exp_poly(
+    l: &JointLaplacian,
+    s0: &[Real],
+    t: Real,
+    tol: Real,
+    m_max: usize,
+) -> Result<(Vec<Real>, usize), TimeError> {
     check("t", t)?;
     let mut s = s0.to_vec();
     let mut done = 0.0;
@@ -306,7 +344,10 @@ pub fn krylov_exp_poly(l: &JointLaplacian, s0: &[Real], t: Real, tol: Real, m_ma
         } else {
             halvings += 1;
             if halvings > 60 {
-                return Err(TimeError::NoConvergence { iters: matvecs, change });
+                return Err(TimeError::NoConvergence {
+                    iters: matvecs,
+                    change,
+                });
             }
             tau *= 0.5;
         }
@@ -318,11 +359,18 @@ pub fn krylov_exp_poly(l: &JointLaplacian, s0: &[Real], t: Real, tol: Real, m_ma
 /// deterministic random start; a Ritz pair (θ, y) counts as converged when
 /// its residual |h_{m+1,m} y_m| / ‖y‖ ≤ `rel_tol` · max |θ|. Returns
 /// (re, im, residual) of the one with the largest real part.
-pub fn rightmost_ritz(l: &JointLaplacian, m: usize, seed: u64, rel_tol: Real) -> (Real, Real, Real) {
+pub fn rightmost_ritz(
+    l: &JointLaplacian,
+    m: usize,
+    seed: u64,
+    rel_tol: Real,
+) -> (Real, Real, Real) {
     use nalgebra::Complex;
     let n = l.n();
     let mut st = seed;
-    let v0: Vec<Real> = (0..n).map(|_| super::sampling::rand01(&mut st) - 0.5).collect();
+    let v0: Vec<Real> = (0..n)
+        .map(|_| super::sampling::rand01(&mut st) - 0.5)
+        .collect();
     let mut ls = vec![0.0; n];
     let (_, h) = arnoldi(&v0, m, |w| {
         l.apply(w, &mut ls);
@@ -332,7 +380,10 @@ pub fn rightmost_ritz(l: &JointLaplacian, m: usize, seed: u64, rel_tol: Real) ->
     let hk = h.view((0, 0), (k, k)).into_owned();
     let beta = if h.nrows() > k { h[(k, k - 1)] } else { 0.0 };
     let thetas: Vec<Complex<Real>> = hk.clone().complex_eigenvalues().iter().copied().collect();
-    let scale = thetas.iter().fold(0.0 as Real, |a, t| a.max(t.norm())).max(1e-300);
+    let scale = thetas
+        .iter()
+        .fold(0.0 as Real, |a, t| a.max(t.norm()))
+        .max(1e-300);
     let hc: DMatrix<Complex<Real>> = hk.map(|x| Complex::new(x, 0.0));
     let mut best = (Real::NEG_INFINITY, 0.0, Real::INFINITY);
     for th in &thetas {
@@ -340,7 +391,9 @@ pub fn rightmost_ritz(l: &JointLaplacian, m: usize, seed: u64, rel_tol: Real) ->
         let shift = *th + Complex::new(1e-10 * scale, 0.0);
         let a = &hc - DMatrix::<Complex<Real>>::identity(k, k) * shift;
         let lu = a.lu();
-        let mut y = nalgebra::DVector::<Complex<Real>>::from_fn(k, |i, _| Complex::new(1.0 + 0.1 * i as Real, 0.0));
+        let mut y = nalgebra::DVector::<Complex<Real>>::from_fn(k, |i, _| {
+            Complex::new(1.0 + 0.1 * i as Real, 0.0)
+        });
         for _ in 0..3 {
             match lu.solve(&y) {
                 Some(z) => {
