@@ -189,3 +189,156 @@ pub fn csr_from_rows(
     let sym = SymbolicSparseRowMat::new_checked(nrows, ncols, row_ptr, None, col_idx);
     Ok(SparseRowMat::new(sym, val))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particles::Codim;
+    use crate::validate::sampling::{rand01, sphere_latitude};
+
+    /// A jittered flat square sheet z = 0 of side 1, spacing 0.05.
+    fn flat_sheet() -> Vec<Vec3> {
+        let mut s = 5u64;
+        let mut v = Vec::new();
+        for i in 0..21 {
+            for j in 0..21 {
+                let jx = 0.01 * (rand01(&mut s) - 0.5);
+                let jy = 0.01 * (rand01(&mut s) - 0.5);
+                v.push(Vec3::new(i as Real * 0.05 + jx, j as Real * 0.05 + jy, 0.0));
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn constants_are_in_the_kernel_and_linear_functions_on_a_plane_too() {
+        let x = flat_sheet();
+        let nb = Neighborhoods::sheet(&x, 0.16).unwrap();
+        for params in [MlsParams::new(0.16), MlsParams::paper(0.16)] {
+            let l = JointLaplacian::assemble(&nb, &params).unwrap();
+            assert!(
+                l.max_relative_row_sum() < 1e-12,
+                "{}",
+                l.max_relative_row_sum()
+            );
+            let s: Vec<Real> = nb.x.iter().map(|p| 0.3 + 2.0 * p.x - 1.5 * p.y).collect();
+            let mut ls = vec![0.0; s.len()];
+            l.apply(&s, &mut ls);
+            // interior particles (not boundary rows): the fit reproduces linear functions exactly
+            let mut checked = 0;
+            for (i, p) in nb.x.iter().enumerate() {
+                if p.x > 0.2 && p.x < 0.8 && p.y > 0.2 && p.y < 0.8 {
+                    assert!(ls[i].abs() < 1e-9, "row {i}: {}", ls[i]);
+                    checked += 1;
+                }
+            }
+            assert!(checked > 100);
+            // and a quadratic: Δ(x² + y²) = 4
+            let q: Vec<Real> = nb.x.iter().map(|p| p.x * p.x + p.y * p.y).collect();
+            l.apply(&q, &mut ls);
+            for (i, p) in nb.x.iter().enumerate() {
+                if p.x > 0.2 && p.x < 0.8 && p.y > 0.2 && p.y < 0.8 {
+                    assert!((ls[i] - 4.0).abs() < 1e-8, "row {i}: {}", ls[i]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn result_does_not_depend_on_particle_order() {
+        let x = sphere_latitude(1.0, 0.08, 0.1, 3);
+        let n = x.len();
+        let perm: Vec<usize> = (0..n).map(|i| (i * 7919) % n).collect();
+        assert_eq!(
+            {
+                let mut p = perm.clone();
+                p.sort();
+                p
+            },
+            (0..n).collect::<Vec<_>>()
+        );
+        let y: Vec<Vec3> = perm.iter().map(|&i| x[i]).collect();
+        let params = MlsParams::new(0.4);
+        let la =
+            JointLaplacian::assemble(&Neighborhoods::sheet(&x, 0.4).unwrap(), &params).unwrap();
+        let lb =
+            JointLaplacian::assemble(&Neighborhoods::sheet(&y, 0.4).unwrap(), &params).unwrap();
+        // (L_b)[a][b] = (L_a)[perm a][perm b]
+        let s: Vec<Real> = x.iter().map(|p| (3.0 * p.x).sin() + p.y * p.z).collect();
+        let sy: Vec<Real> = perm.iter().map(|&i| s[i]).collect();
+        let (mut ra, mut rb) = (vec![0.0; n], vec![0.0; n]);
+        la.apply(&s, &mut ra);
+        lb.apply(&sy, &mut rb);
+        for k in 0..n {
+            assert!(
+                (rb[k] - ra[perm[k]]).abs() < 1e-9 * (1.0 + ra[perm[k]].abs()),
+                "{k}"
+            );
+        }
+    }
+
+    #[test]
+    fn degenerate_neighbourhoods_fall_back_without_nan() {
+        // a line of points declared as sheet (collinear), an isolated point, and a proper patch
+        let mut x: Vec<Vec3> = (0..12)
+            .map(|i| Vec3::new(i as Real * 0.02, 5.0, 0.0))
+            .collect();
+        x.push(Vec3::new(-9.0, -9.0, -9.0));
+        x.extend(flat_sheet());
+        let nb = Neighborhoods::build(&x, &vec![Codim::Sheet; x.len()], 0.16).unwrap();
+        let l = JointLaplacian::assemble(&nb, &MlsParams::new(0.16)).unwrap();
+        assert!(l.matrix.val().iter().all(|v| v.is_finite()));
+        assert_eq!(l.stats.particles, x.len());
+        assert_eq!(l.stats.isolated, 1);
+        assert!(l.stats.no_row >= 13, "{:?}", l.stats); // collinear line + isolated
+        assert_eq!(
+            l.stats.full_order + l.stats.lowered_order + l.stats.no_row,
+            x.len()
+        );
+        // a NaN position is an error naming the particle
+        let mut bad = x.clone();
+        bad[4].y = Real::NAN;
+        assert_eq!(
+            Neighborhoods::sheet(&bad, 0.16).unwrap_err(),
+            MlsError::NonFinite { index: 4 }
+        );
+        assert!(matches!(
+            MlsParams {
+                order: 9,
+                ..MlsParams::new(0.1)
+            }
+            .validate(),
+            Err(MlsError::InvalidParam { field: "order", .. })
+        ));
+    }
+
+    #[test]
+    fn joint_blocks_partition_the_matrix() {
+        use crate::validate::butterfly::butterfly_particles;
+        let (x, c) = butterfly_particles(0.08);
+        let nb = Neighborhoods::build(&x, &c, 0.28).unwrap();
+        let l = JointLaplacian::assemble(&nb, &MlsParams::new(0.28)).unwrap();
+        let nnz: usize = [
+            Block::SheetSheet,
+            Block::SheetFilament,
+            Block::FilamentSheet,
+            Block::FilamentFilament,
+        ]
+        .iter()
+        .map(|&b| l.block(b).unwrap().compute_nnz())
+        .sum();
+        assert_eq!(nnz, l.matrix.compute_nnz());
+        let b = l.block(Block::FilamentSheet).unwrap();
+        assert_eq!((b.nrows(), b.ncols()), (nb.len() - nb.n_sheet, nb.n_sheet));
+        assert!(l.block(Block::SheetFilament).unwrap().compute_nnz() > 0);
+        // faer's own product agrees with `apply`
+        let s: Vec<Real> = nb.x.iter().map(|p| p.x * p.y).collect();
+        let mut y = vec![0.0; s.len()];
+        l.apply(&s, &mut y);
+        let sc = faer::Col::<Real>::from_fn(s.len(), |i| s[i]);
+        let yf = &l.matrix * &sc;
+        for i in 0..s.len() {
+            assert!((yf[i] - y[i]).abs() <= 1e-9 * (1.0 + y[i].abs()));
+        }
+    }
+}

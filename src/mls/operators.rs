@@ -531,3 +531,34 @@ pub fn par_divergences(
         })
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::validate::sampling::sphere_latitude;
+
+    #[test]
+    fn gradient_and_divergence_on_the_unit_sphere() {
+        let x = sphere_latitude(1.0, 0.05, 0.0, 1);
+        let nb = Neighborhoods::sheet(&x, 0.25).unwrap();
+        let params = MlsParams::new(0.25);
+        // ∇z = e_z − (e_z·n) n
+        let s: Vec<Real> = nb.x.iter().map(|p| p.z).collect();
+        let (g, st) = par_gradients(&nb, &params, &s);
+        assert_eq!(st.full_order, nb.len());
+        let gerr =
+            nb.x.iter()
+                .zip(&g)
+                .map(|(p, g)| (g - (Vec3::z() - p.z * p)).norm())
+                .fold(0.0, Real::max);
+        assert!(gerr < 1e-5, "gradient error {gerr}");
+        // ∇·x = 2 on a sphere (surface divergence of the identity)
+        let (d, _) = par_divergences(&nb, &params, &nb.x);
+        let derr = d.iter().map(|v| (v - 2.0).abs()).fold(0.0, Real::max);
+        assert!(derr < 1e-5, "divergence error {derr}");
+        // tangential rotation field (−y, x, 0) is divergence free
+        let v: Vec<Vec3> = nb.x.iter().map(|p| Vec3::new(-p.y, p.x, 0.0)).collect();
+        let (d, _) = par_divergences(&nb, &params, &v);
+        assert!(d.iter().all(|v| v.abs() < 1e-6));
+    }
+}

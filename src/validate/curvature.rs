@@ -145,6 +145,13 @@ pub fn curvature_run(
                     .map(|e| (k - e).norm() / e.norm())
             })
             .collect();
+    if errs.is_empty() {
+        return Err(ValidateError::Param {
+            what: "spacing",
+            value: spacing,
+            reason: "too coarse: h leaves no particle away from the open ends",
+        });
+    }
     let max = errs.iter().fold(0.0 as Real, |a, &b| {
         if b.is_finite() {
             a.max(b)
