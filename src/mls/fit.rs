@@ -75,14 +75,34 @@ pub struct LsqFit {
     pub order: usize,
     /// Number of basis terms.
     pub k: usize,
-    /// Row-major m × k basis matrix B.
-    basis: Vec<Real>,
+    /// Number of members m.
+    m: usize,
+    /// Weighted basis, transposed and row-major: row i holds Ψ_q P_i(η_q),
+    /// q = 0..m (contiguous, so every product below is a dot or an axpy).
+    wbt: Vec<Real>,
     /// Member weights Ψ_q (length m).
     weights: Vec<Real>,
     /// Equilibration D = diag(A)^{-1/2}.
     scale: Vec<Real>,
     /// Lower Cholesky factor of D A D, row-major k × k.
     chol: Vec<Real>,
+}
+
+#[inline]
+fn dot(a: &[Real], b: &[Real]) -> Real {
+    // four partial sums: lets the compiler vectorise, fixed order (deterministic)
+    let mut acc = [0.0; 4];
+    let n4 = a.len() / 4 * 4;
+    for (ca, cb) in a[..n4].chunks_exact(4).zip(b[..n4].chunks_exact(4)) {
+        for l in 0..4 {
+            acc[l] += ca[l] * cb[l];
+        }
+    }
+    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for i in n4..a.len() {
+        s += a[i] * b[i];
+    }
+    s
 }
 
 impl LsqFit {
@@ -104,24 +124,27 @@ impl LsqFit {
         if active < k {
             return None;
         }
-        let mut basis = vec![0.0; m * k];
+        // unweighted basis Bᵀ (k × m) and weighted Ψ Bᵀ
+        let mut bt = vec![0.0; k * m];
+        let mut row = [0.0; 28];
         for (q, e) in eta.iter().enumerate() {
-            monomials(vars, order, *e, &mut basis[q * k..(q + 1) * k]);
-        }
-        // A = Bᵀ W B (lower triangle)
-        let mut a = vec![0.0; k * k];
-        for q in 0..m {
-            let w = weights[q];
-            if w == 0.0 {
-                continue;
-            }
-            let row = &basis[q * k..(q + 1) * k];
+            monomials(vars, order, *e, &mut row[..k]);
             for i in 0..k {
-                let wi = w * row[i];
-                let ai = &mut a[i * k..i * k + i + 1];
-                for (j, aij) in ai.iter_mut().enumerate() {
-                    *aij += wi * row[j];
-                }
+                bt[i * m + q] = row[i];
+            }
+        }
+        let mut wbt = bt.clone();
+        for i in 0..k {
+            for (v, w) in wbt[i * m..(i + 1) * m].iter_mut().zip(weights) {
+                *v *= w;
+            }
+        }
+        // A = Bᵀ W B (lower triangle), one dot product per entry
+        let mut a = vec![0.0; k * k];
+        for i in 0..k {
+            let wi = &wbt[i * m..(i + 1) * m];
+            for j in 0..=i {
+                a[i * k + j] = dot(wi, &bt[j * m..(j + 1) * m]);
             }
         }
         let mut scale = vec![0.0; k];
@@ -160,16 +183,23 @@ impl LsqFit {
             vars,
             order,
             k,
-            basis,
+            m,
+            wbt,
             weights: weights.to_vec(),
             scale,
             chol: a,
         })
     }
 
-    /// Basis row of member q (its monomials; entries 1.. hold η).
-    pub fn basis_row(&self, q: usize) -> &[Real] {
-        &self.basis[q * self.k..(q + 1) * self.k]
+    /// Basis value P_i(η_q) of member q (i = 1, 2 give η¹, η²). Members with
+    /// zero weight return 0.
+    pub fn basis(&self, q: usize, i: usize) -> Real {
+        let w = self.weights[q];
+        if w == 0.0 {
+            0.0
+        } else {
+            self.wbt[i * self.m + q] / w
+        }
     }
 
     /// Weight Ψ_q of member q.
@@ -179,7 +209,7 @@ impl LsqFit {
 
     /// Number of members m.
     pub fn members(&self) -> usize {
-        self.weights.len()
+        self.m
     }
 
     /// Solves (Bᵀ W B) y = `rhs` in place.
@@ -209,32 +239,29 @@ impl LsqFit {
 
     /// Coefficients β = H s of one field given its member values (eq. 34).
     pub fn coefficients(&self, values: &[Real]) -> Vec<Real> {
-        let k = self.k;
-        let mut rhs = vec![0.0; k];
-        for (q, &s) in values.iter().enumerate() {
-            let w = self.weights[q] * s;
-            if w != 0.0 {
-                for (r, b) in rhs.iter_mut().zip(&self.basis[q * k..(q + 1) * k]) {
-                    *r += w * b;
-                }
-            }
-        }
+        let m = self.m;
+        let mut rhs: Vec<Real> = (0..self.k)
+            .map(|i| dot(&self.wbt[i * m..(i + 1) * m], values))
+            .collect();
         self.solve_normal(&mut rhs);
         rhs
     }
 
     /// The member weights r_q = dᵀ H e_q of a linear functional β ↦ dᵀ β:
-    /// one small solve (Bᵀ W B) y = d, then r_q = Ψ_q B_q · y.
+    /// one small solve (Bᵀ W B) y = d, then r_q = Σ_i y_i Ψ_q P_i(η_q).
     pub fn functional_row(&self, d: &[Real]) -> Vec<Real> {
-        let k = self.k;
+        let (k, m) = (self.k, self.m);
         let mut y = d[..k].to_vec();
         self.solve_normal(&mut y);
-        (0..self.members())
-            .map(|q| {
-                let b = &self.basis[q * k..(q + 1) * k];
-                self.weights[q] * b.iter().zip(&y).map(|(a, c)| a * c).sum::<Real>()
-            })
-            .collect()
+        let mut r = vec![0.0; m];
+        for (i, yi) in y.iter().enumerate() {
+            if *yi != 0.0 {
+                for (rq, b) in r.iter_mut().zip(&self.wbt[i * m..(i + 1) * m]) {
+                    *rq += yi * b;
+                }
+            }
+        }
+        r
     }
 }
 

@@ -12,7 +12,7 @@
 //! result does not depend on the thread count. Every row sums to zero up to
 //! round-off, because the fits reproduce constants.
 
-use super::operators::{par_fit_map, par_frames, Neighborhoods};
+use super::operators::{par_fit_map, par_frames, LocalFit, Neighborhoods};
 use super::{FitStats, MlsError, MlsParams};
 use crate::math::{Real, Vec3};
 use faer::sparse::{SparseRowMat, SymbolicSparseRowMat};
@@ -51,12 +51,31 @@ pub fn laplacian_rows(
     let frames = par_frames(nb, params);
     let christoffel = params.christoffel;
     Ok(par_fit_map(nb, &frames, params, |_, f| {
-        let Some(f) = f else { return Vec::new() };
-        let r = f.laplacian_row(christoffel);
-        let mut row: Vec<(usize, Real)> = f.members.iter().map(|&q| q as usize).zip(r).collect();
-        row.sort_unstable_by_key(|e| e.0);
-        row
+        f.map_or_else(Vec::new, |f| row_entries(f, christoffel))
     }))
+}
+
+/// The Laplacian row of one fit as (column, value), columns ascending: the
+/// neighbours are already sorted, so the particle's own entry is merged in.
+pub fn row_entries(f: &LocalFit, christoffel: bool) -> Vec<(usize, Real)> {
+    let r = f.laplacian_row(christoffel);
+    let p = f.members[0] as usize;
+    let mut row = Vec::with_capacity(r.len());
+    let mut own = Some((p, r[0]));
+    for (&q, &v) in f.members[1..].iter().zip(&r[1..]) {
+        let q = q as usize;
+        if let Some(o) = own {
+            if o.0 < q {
+                row.push(o);
+                own = None;
+            }
+        }
+        row.push((q, v));
+    }
+    if let Some(o) = own {
+        row.push(o);
+    }
+    row
 }
 
 impl JointLaplacian {

@@ -185,12 +185,12 @@ impl FitOutcome {
 
 /// Fit weight Ψ of a neighbour at distance `d` among `n` neighbours (eq. 32).
 #[inline]
-fn neighbour_weight(w: Weighting, d: Real, h: Real, n: usize) -> Real {
+fn neighbour_weight(w: Weighting, d: Vec3, h: Real, n: usize) -> Real {
     let base = 1.0 / n as Real;
     match w {
         Weighting::Paper => base,
         Weighting::Wendland => {
-            let r = (d / h).min(1.0);
+            let r = (d.norm() / h).min(1.0);
             let a = 1.0 - r;
             base * a * a * a * a * (1.0 + 4.0 * r)
         }
@@ -251,7 +251,7 @@ pub fn fit_particle(nb: &Neighborhoods, p: usize, frame: &Frame, params: &MlsPar
         let (wf, wg) = if k == 0 {
             (1.0, 1.0)
         } else {
-            let base = neighbour_weight(params.weighting, d.norm(), h, n);
+            let base = neighbour_weight(params.weighting, d, h, n);
             let cross = match (cp, nb.codim(q)) {
                 (Codim::Sheet, Codim::Filament) => params.filament_weight_in_sheet,
                 (Codim::Filament, Codim::Sheet) => params.sheet_weight_in_filament,
@@ -446,12 +446,13 @@ impl LocalFit {
         let dims = if self.codim == Codim::Sheet { 2.0 } else { 1.0 };
         let (mut wsum, mut m2) = (0.0, 0.0);
         for q in 1..m {
-            let b = self.field.basis_row(q);
-            let r2 = if self.codim == Codim::Sheet {
-                b[1] * b[1] + b[2] * b[2]
+            let b1 = self.field.basis(q, 1);
+            let b2 = if self.codim == Codim::Sheet {
+                self.field.basis(q, 2)
             } else {
-                b[1] * b[1]
+                0.0
             };
+            let r2 = b1 * b1 + b2 * b2;
             let w = self.field.weight(q);
             wsum += w;
             m2 += w * r2;

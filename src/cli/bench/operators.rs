@@ -6,7 +6,7 @@
 //! run time, log–log.
 use anyhow::{Context, Result};
 use clap::Args;
-use codimfx::mls::laplacian::{csr_from_rows, laplacian_rows};
+use codimfx::mls::laplacian::{csr_from_rows, laplacian_rows, row_entries};
 use codimfx::mls::operators::{fit_particle, par_fit_map, par_frames};
 use codimfx::mls::{MlsParams, Neighborhoods};
 use codimfx::validate::sampling::{sphere_latitude, sphere_spacing_for};
@@ -29,14 +29,30 @@ pub struct OperatorsArgs {
     #[arg(long, default_value_t = 3)]
     reps: usize,
     /// Particle counts of the sphere-diffusion error/time table (h scaled
-    /// with the spacing as in the default 30k, h = 0.1 case); empty skips it.
+    /// with the spacing as in the default 30k, h = 0.1 case).
     #[arg(long, value_delimiter = ',', default_values_t = vec![7_500usize, 30_000, 120_000])]
     diffusion_sizes: Vec<usize>,
+    /// Skip the sphere-diffusion error/time table.
+    #[arg(long)]
+    no_diffusion: bool,
     /// Write a log–log plot of error against run time to this PNG file.
     #[arg(long)]
     plot: Option<PathBuf>,
 }
 
+/// CPU seconds (user + system, all threads) of this process so far, from
+/// /proc/self/stat (clock ticks of 1/100 s); `None` where unavailable.
+fn cpu_seconds() -> Option<Real> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // fields 14 and 15 of stat(5) are utime and stime; `rest` starts at field 3
+    let ut: Real = f.get(11)?.parse().ok()?;
+    let st: Real = f.get(12)?.parse().ok()?;
+    Some((ut + st) / 100.0)
+}
+
+/// Fastest wall time over `reps` runs, and the mean CPU time per run.
 fn best_of<T>(reps: usize, mut f: impl FnMut() -> T) -> (Real, T) {
     let mut best = Real::INFINITY;
     let mut out = None;
@@ -47,6 +63,15 @@ fn best_of<T>(reps: usize, mut f: impl FnMut() -> T) -> (Real, T) {
         out = Some(r);
     }
     (best, out.expect("at least one repetition"))
+}
+
+/// Mean CPU seconds per run of `f` over `reps` runs (None without /proc).
+fn cpu_of(reps: usize, mut f: impl FnMut()) -> Option<Real> {
+    let c0 = cpu_seconds()?;
+    for _ in 0..reps.max(1) {
+        f();
+    }
+    Some((cpu_seconds()? - c0) / reps.max(1) as Real)
 }
 
 /// One point of the error/time table.
@@ -63,8 +88,10 @@ pub fn run(a: OperatorsArgs) -> Result<()> {
         "## MLS operator stages (sheet particles on the unit sphere, h = 4.88 Δ, order {})\n",
         a.order
     );
-    println!("| particles | nbrs | neighbours ns/p | frames ns/p | fits ns/p | fits+rows ns/p | assembly ns/p | frames+fits+rows particles/s |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("Wall times are the fastest of --reps runs; CPU time (all threads, from /proc) is load-independent,");
+    println!("and 2 cores / CPU time is the throughput two unshared cores would give.\n");
+    println!("| particles | nbrs | neighbours ns/p | frames ns/p | fits ns/p | fits+rows ns/p | assembly ns/p | frames+fits+rows particles/s (wall) | frames+fits+rows CPU ns/p | particles/s on 2 free cores |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for &n in &a.sizes {
         let sp = sphere_spacing_for(n, 1.0);
         let h = 4.88 * sp;
@@ -85,12 +112,7 @@ pub fn run(a: OperatorsArgs) -> Result<()> {
         anyhow::ensure!(ok == nb.len(), "only {ok} of {} fits succeeded", nb.len());
         let (t_rows, rows) = best_of(a.reps, || {
             par_fit_map(&nb, &frames, &params, |_, f| {
-                let f = f.expect("fit checked above");
-                let r = f.laplacian_row(params.christoffel);
-                let mut row: Vec<(usize, Real)> =
-                    f.members.iter().map(|&q| q as usize).zip(r).collect();
-                row.sort_unstable_by_key(|e| e.0);
-                row
+                f.map_or_else(Vec::new, |f| row_entries(f, params.christoffel))
             })
             .0
         });
@@ -103,8 +125,17 @@ pub fn run(a: OperatorsArgs) -> Result<()> {
             "stage-by-stage rows differ from laplacian_rows"
         );
         let ops = t_fr + t_rows;
+        // CPU time of frames + fits + rows, repeated to ≥ ~1 s for the 10 ms clock
+        let creps = ((1.0 / ops.max(1e-3)).ceil() as usize).clamp(a.reps.max(1), 50);
+        let cpu = cpu_of(creps, || {
+            let fr = par_frames(&nb, &params);
+            let r = par_fit_map(&nb, &fr, &params, |_, f| {
+                f.map_or_else(Vec::new, |f| row_entries(f, params.christoffel))
+            });
+            std::hint::black_box(r);
+        });
         println!(
-            "| {} | {:.1} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
+            "| {} | {:.1} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {} | {} |",
             x.len(),
             nb.lists.mean_count(),
             t_nb * 1e9 / np,
@@ -112,10 +143,12 @@ pub fn run(a: OperatorsArgs) -> Result<()> {
             t_fit * 1e9 / np,
             t_rows * 1e9 / np,
             t_asm * 1e9 / np,
-            np / ops
+            np / ops,
+            cpu.map_or("-".into(), |c| format!("{:.0}", c * 1e9 / np)),
+            cpu.map_or("-".into(), |c| format!("{:.0}", 2.0 * np / c)),
         );
     }
-    if a.diffusion_sizes.is_empty() {
+    if a.no_diffusion || a.diffusion_sizes.is_empty() {
         return Ok(());
     }
     let h_over = 0.1 / sphere_spacing_for(30_000, 1.0);
