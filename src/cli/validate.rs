@@ -265,6 +265,12 @@ fn sphere(a: SphereArgs) -> Result<()> {
     if let (Some(re), Some(im)) = (r.rightmost_eigenvalue, r.rightmost_eigenvalue_im) {
         println!("| rightmost eigenvalue | {re:.3e} {im:+.3e}i |");
     }
+    if let Some(rho) = r.spectral_radius {
+        println!(
+            "| spectral radius (Ritz) | {rho:.4e} (forward Euler needs dt < {:.3e}) |",
+            2.0 / rho
+        );
+    }
     println!(
         "| fits | {} full order, {} lowered, {} boundary rows, {} without row ({} isolated) |",
         r.fit_stats.full_order,

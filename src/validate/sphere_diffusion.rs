@@ -120,6 +120,9 @@ pub struct SphereDiffusionReport {
     pub rightmost_eigenvalue: Option<Real>,
     /// Im of that eigenvalue.
     pub rightmost_eigenvalue_im: Option<Real>,
+    /// Largest |Ritz value| of L (Ritz method only): ≈ spectral radius ρ;
+    /// forward Euler is stable only for Δt < 2/ρ.
+    pub spectral_radius: Option<Real>,
     /// Matrix–vector products of the accurate exponential.
     pub krylov_matvecs: usize,
     /// Largest |row sum| / max |entry| of L.
@@ -176,10 +179,12 @@ impl SphereDiffusion {
         let (spatial_max_error, spatial_l1_error) = err(&accurate, &exact);
         let (total_max_error, l1_error) = err(&scheme_sol, &exact);
         let (time_max_error, _) = err(&scheme_sol, &accurate);
+        let mut spectral_radius = None;
         let (re, im) = match self.eigen {
             EigenMethod::None => (None, None),
             EigenMethod::Ritz => {
-                let (re, im, _) = rightmost_ritz(&l, 120, 7, 1e-6);
+                let (re, im, _, rho) = rightmost_ritz(&l, 120, 7, 1e-6);
+                spectral_radius = Some(rho);
                 (Some(re), Some(im))
             }
             EigenMethod::ShiftInvert => {
@@ -203,6 +208,7 @@ impl SphereDiffusion {
             time_max_error,
             rightmost_eigenvalue: re,
             rightmost_eigenvalue_im: im,
+            spectral_radius,
             krylov_matvecs,
             max_relative_row_sum: l.max_relative_row_sum(),
             fit_stats: l.stats,

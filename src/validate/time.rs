@@ -358,13 +358,15 @@ pub fn krylov_exp_poly(
 /// Rightmost converged Ritz value of L: `m` Arnoldi steps on L from a
 /// deterministic random start; a Ritz pair (θ, y) counts as converged when
 /// its residual |h_{m+1,m} y_m| / ‖y‖ ≤ `rel_tol` · max |θ|. Returns
-/// (re, im, residual) of the one with the largest real part.
+/// (re, im, residual) of the one with the largest real part, and the
+/// largest |θ| (a lower estimate of the spectral radius ρ, which bounds the
+/// forward-Euler step: Δt < 2/ρ for a real negative spectrum).
 pub fn rightmost_ritz(
     l: &JointLaplacian,
     m: usize,
     seed: u64,
     rel_tol: Real,
-) -> (Real, Real, Real) {
+) -> (Real, Real, Real, Real) {
     use nalgebra::Complex;
     let n = l.n();
     let mut st = seed;
@@ -411,5 +413,5 @@ pub fn rightmost_ritz(
             best = (th.re, th.im, res);
         }
     }
-    best
+    (best.0, best.1, best.2, scale)
 }
