@@ -96,6 +96,22 @@ fn crank_nicolson_agrees_with_the_krylov_exponential_and_operator_is_stable() {
         .fold(0.0, f64::max);
     // CN error ≈ t |λ|³ Δt² / 12 e^{-1} ≈ 1.2e-6 for the λ = −2 mode
     assert!(d < 3e-6, "CN vs Krylov {d}");
+    // a long implicit run decays monotonically towards the mean (no growing mode)
+    let lu_be = ShiftedLu::new(&l, 0.05).unwrap();
+    let mean = s0.iter().sum::<f64>() / s0.len() as f64;
+    let mut s: Vec<f64> = s0
+        .iter()
+        .enumerate()
+        .map(|(i, z)| z + 0.1 * ((i * 37 % 11) as f64 - 5.0) / 5.0)
+        .collect();
+    let mut prev = f64::INFINITY;
+    for step in 0..400 {
+        lu_be.solve(&mut s);
+        let dev = s.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max);
+        assert!(dev <= prev * (1.0 + 1e-12), "step {step}: {dev} > {prev}");
+        prev = dev;
+    }
+    assert!(prev < 1e-3, "{prev}");
     // rightmost eigenvalue: shift-invert Arnoldi and converged Ritz values agree on ≈ 0
     let lu = ShiftedLu::new(&l, 0.01).unwrap();
     let (re, _) = rightmost_eigenvalue(&lu, l.n(), 40, 3);

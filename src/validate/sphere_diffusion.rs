@@ -171,10 +171,14 @@ impl SphereDiffusion {
             Scheme::CrankNicolson => (crank_nicolson(&l, &s0, t, self.dt)?, self.dt),
         };
         let n = s0.len() as Real;
+        // a blown-up (non-finite) solution reports infinite errors, never NaN
         let err = |a: &[Real], b: &[Real]| -> (Real, Real) {
+            if a.iter().chain(b).any(|v| !v.is_finite()) {
+                return (Real::INFINITY, Real::INFINITY);
+            }
             let m = max_abs(a.iter().zip(b).map(|(x, y)| x - y));
             let l1 = a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<Real>() / n;
-            (if m.is_finite() { m } else { Real::INFINITY }, l1)
+            (m, l1)
         };
         let (spatial_max_error, spatial_l1_error) = err(&accurate, &exact);
         let (total_max_error, l1_error) = err(&scheme_sol, &exact);

@@ -215,7 +215,7 @@ pub fn run(a: OperatorsArgs) -> Result<()> {
         let colors: Vec<[u8; 3]> = series.iter().map(|s| s.3).collect();
         plot(path, &points, &colors)?;
         println!(
-            "\nplot: {} (x: seconds, y: total max error, log–log, decades marked)",
+            "\nplot: {} (x: seconds, y: total max error, log–log, grid at decades; unstable runs (error ≥ 1) left out)",
             path.display()
         );
         for (name, _, _, c) in &series {
@@ -231,10 +231,9 @@ fn plot(path: &PathBuf, pts: &[Point], colors: &[[u8; 3]]) -> Result<()> {
     use image::{Rgb, RgbImage};
     let (w, h, m) = (900u32, 600u32, 50i64);
     let mut img = RgbImage::from_pixel(w, h, Rgb([255, 255, 255]));
-    let good: Vec<&Point> = pts
-        .iter()
-        .filter(|p| p.seconds > 0.0 && p.error > 0.0 && p.error.is_finite())
-        .collect();
+    // unstable runs (error ≥ 1 or infinite) are left out of the plot; the table lists them
+    let shown = |p: &Point| p.seconds > 0.0 && p.error > 0.0 && p.error < 1.0;
+    let good: Vec<&Point> = pts.iter().filter(|p| shown(p)).collect();
     anyhow::ensure!(!good.is_empty(), "nothing to plot");
     let lx: Vec<Real> = good.iter().map(|p| p.seconds.log10()).collect();
     let ly: Vec<Real> = good.iter().map(|p| p.error.log10()).collect();
@@ -295,7 +294,7 @@ fn plot(path: &PathBuf, pts: &[Point], colors: &[[u8; 3]]) -> Result<()> {
     for s in 0..colors.len() {
         let ser: Vec<(i64, i64)> = pts
             .iter()
-            .filter(|p| p.series == s && p.seconds > 0.0 && p.error > 0.0 && p.error.is_finite())
+            .filter(|p| p.series == s && shown(p))
             .map(|p| (px(p.seconds.log10()), py(p.error.log10())))
             .collect();
         for wnd in ser.windows(2) {
