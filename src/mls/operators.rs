@@ -562,4 +562,27 @@ mod tests {
         let (d, _) = par_divergences(&nb, &params, &v);
         assert!(d.iter().all(|v| v.abs() < 1e-6));
     }
+
+    #[test]
+    fn filament_gradient_divergence_and_laplacian_on_a_circle() {
+        use crate::validate::sampling::circle;
+        let x = circle(1.0, 0.02);
+        let nb = Neighborhoods::build(&x, &vec![Codim::Filament; x.len()], 0.1).unwrap();
+        let params = MlsParams::new(0.1);
+        // s = x: ∇s = (t·e_x) t with t the unit tangent; Δs = −x on the unit circle
+        let s: Vec<Real> = nb.x.iter().map(|p| p.x).collect();
+        let (g, st) = par_gradients(&nb, &params, &s);
+        assert_eq!((st.full_order, st.boundary), (nb.len(), 0));
+        for (p, g) in nb.x.iter().zip(&g) {
+            let t = Vec3::new(-p.y, p.x, 0.0);
+            assert!((g - t.x * t).norm() < 1e-6, "{g:?}");
+        }
+        let l = super::super::JointLaplacian::assemble(&nb, &params).unwrap();
+        let mut ls = vec![0.0; s.len()];
+        l.apply(&s, &mut ls);
+        assert!(nb.x.iter().zip(&ls).all(|(p, v)| (v + p.x).abs() < 1e-5));
+        // ∇·x = 1 along a curve
+        let (d, _) = par_divergences(&nb, &params, &nb.x);
+        assert!(d.iter().all(|v| (v - 1.0).abs() < 1e-6), "{:?}", &d[..3]);
+    }
 }
