@@ -124,13 +124,32 @@ impl LsqFit {
         if active < k {
             return None;
         }
-        // unweighted basis Bᵀ (k × m) and weighted Ψ Bᵀ
+        // unweighted basis Bᵀ (k × m), row by row: each monomial of degree d is
+        // a monomial of degree d − 1 times η¹ (or η² for the last one), so
+        // every row is one contiguous elementwise product (vectorises)
         let mut bt = vec![0.0; k * m];
-        let mut row = [0.0; 28];
+        bt[..m].iter_mut().for_each(|v| *v = 1.0);
         for (q, e) in eta.iter().enumerate() {
-            monomials(vars, order, *e, &mut row[..k]);
-            for i in 0..k {
-                bt[i * m + q] = row[i];
+            bt[m + q] = e[0];
+            if vars == 2 {
+                bt[2 * m + q] = e[1];
+            }
+        }
+        let row_of = |d: usize, i: usize| if vars == 1 { d } else { d * (d + 1) / 2 + i };
+        for d in 2..=order {
+            let top = if vars == 1 { 0 } else { d };
+            for i in 0..=top {
+                let (src, var) = if i < d {
+                    (row_of(d - 1, i), 1)
+                } else {
+                    (row_of(d - 1, d - 1), 2)
+                };
+                let dst = row_of(d, i);
+                let (lo, hi) = bt.split_at_mut(dst * m);
+                let (s, x) = (&lo[src * m..(src + 1) * m], &lo[var * m..(var + 1) * m]);
+                for ((o, a), b) in hi[..m].iter_mut().zip(s).zip(x) {
+                    *o = a * b;
+                }
             }
         }
         let mut wbt = bt.clone();
@@ -139,12 +158,34 @@ impl LsqFit {
                 *v *= w;
             }
         }
-        // A = Bᵀ W B (lower triangle), one dot product per entry
+        // A = Bᵀ W B (lower triangle). A_ij = Σ_q Ψ_q η_q^(α_i + α_j) depends only on
+        // the summed exponents, so each distinct moment is one dot product
+        // (45 instead of 120 for the quartic) and is copied to its other entries.
+        let mut ex = [(0usize, 0usize); 28];
+        let mut t = 0;
+        for d in 0..=order {
+            if vars == 1 {
+                ex[t] = (d, 0);
+                t += 1;
+            } else {
+                for i in 0..=d {
+                    ex[t] = (d - i, i);
+                    t += 1;
+                }
+            }
+        }
+        let mut memo = [[Real::NAN; 13]; 13];
         let mut a = vec![0.0; k * k];
         for i in 0..k {
             let wi = &wbt[i * m..(i + 1) * m];
             for j in 0..=i {
-                a[i * k + j] = dot(wi, &bt[j * m..(j + 1) * m]);
+                let (p, r) = (ex[i].0 + ex[j].0, ex[i].1 + ex[j].1);
+                let mut v = memo[p][r];
+                if v.is_nan() {
+                    v = dot(wi, &bt[j * m..(j + 1) * m]);
+                    memo[p][r] = v;
+                }
+                a[i * k + j] = v;
             }
         }
         let mut scale = vec![0.0; k];
