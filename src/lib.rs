@@ -9,11 +9,13 @@ pub mod emitter;
 pub mod gas;
 pub mod linsolve;
 pub mod math;
+pub mod mls;
 pub mod neighbors;
 pub mod particles;
 pub mod reseed;
 pub mod tension;
 pub mod transition;
+pub mod validate;
 
 pub use math::{Real, Vec3};
 pub use particles::{Codim, Particles};

@@ -17,11 +17,14 @@ struct Cli {
 enum Command {
     /// Measure run time (and error, where there is one) of a part of the solver.
     Bench(cli::bench::BenchArgs),
+    /// Check the MLS operators against analytic solutions (sphere diffusion, curvature, butterfly).
+    Validate(cli::validate::ValidateArgs),
 }
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Bench(a) => cli::bench::run(a),
+        Command::Validate(a) => cli::validate::run(a),
     }
 }

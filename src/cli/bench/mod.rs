@@ -2,6 +2,7 @@
 use clap::{Args, Subcommand};
 
 mod neighbors;
+mod operators;
 
 /// Arguments of `codimfx bench`.
 #[derive(Args, Debug)]
@@ -14,11 +15,14 @@ pub struct BenchArgs {
 enum BenchTarget {
     /// Fixed-radius neighbour search: uniform cell grid against kiddo's k-d tree.
     Neighbors(neighbors::NeighborsArgs),
+    /// MLS operators: time per stage, and sphere-diffusion error against run time.
+    Operators(operators::OperatorsArgs),
 }
 
 /// Runs the chosen benchmark.
 pub fn run(a: BenchArgs) -> anyhow::Result<()> {
     match a.target {
         BenchTarget::Neighbors(x) => neighbors::run(x),
+        BenchTarget::Operators(x) => operators::run(x),
     }
 }
