@@ -17,11 +17,17 @@ struct Cli {
 enum Command {
     /// Measure run time (and error, where there is one) of a part of the solver.
     Bench(cli::bench::BenchArgs),
+    /// Simulate a scene file into a particle cache (PLY per frame + manifest.json).
+    Sim(cli::sim::SimArgs),
+    /// Render PNG previews and a contact sheet of a particle cache.
+    Preview(cli::preview::PreviewArgs),
 }
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Bench(a) => cli::bench::run(a),
+        Command::Sim(a) => cli::sim::run(a),
+        Command::Preview(a) => cli::preview::run(a),
     }
 }

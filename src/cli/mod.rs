@@ -1,2 +1,4 @@
 //! One file per subcommand: each defines its clap `…Args` and a `run`.
 pub mod bench;
+pub mod preview;
+pub mod sim;
