@@ -88,7 +88,7 @@ pub struct StepParams {
     pub viscosity: Real,
     /// FLIP fraction.
     pub flip: Real,
-    /// Level-set particle radius factor.
+    /// Level-set particle radius relative to Δx.
     pub surface_radius: Real,
     /// Pressure PCG stopping rule.
     pub pressure: PcgParams,

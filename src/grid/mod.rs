@@ -236,40 +236,64 @@ impl MacGrid {
     /// faces outside the allocated blocks or on the far wall read 0.
     #[inline]
     pub fn sample(&self, field: &[Real], a: usize, x: &Vec3) -> Real {
+        let (idx, w) = self.stencil(a, x);
+        let mut acc = 0.0;
+        for k in 0..8 {
+            if idx[k] != NONE {
+                acc += w[k] * field[idx[k] as usize];
+            }
+        }
+        acc
+    }
+
+    /// The eight faces (slots, [`NONE`] where absent) and trilinear weights
+    /// that [`Self::sample`] uses for component `a` at `x`.
+    #[inline]
+    pub fn stencil(&self, a: usize, x: &Vec3) -> ([u32; 8], [Real; 8]) {
+        self.stencil_clamped(a, x, false)
+    }
+
+    /// [`Self::stencil`]; with `skip_walls` the faces on the domain walls are
+    /// replaced by their interior neighbours (a zero-gradient extension), as the
+    /// FLIP increment needs: the wall faces hold 0 before and after the
+    /// projection, which would otherwise hide the change of a particle's
+    /// normal velocity next to a wall from the FLIP update.
+    #[inline]
+    pub fn stencil_clamped(&self, a: usize, x: &Vec3, skip_walls: bool) -> ([u32; 8], [Real; 8]) {
         let q = self.to_grid(x);
         let mut f = [q.x - 0.5, q.y - 0.5, q.z - 0.5];
         f[a] = q[a];
         let mut i0 = [0isize; 3];
         let mut t = [0.0; 3];
         for d in 0..3 {
-            let hi = if d == a {
-                self.n[d] as Real
-            } else {
-                self.n[d] as Real - 1.0
+            let n = self.n[d] as Real;
+            let (lo, hi) = match (d == a, skip_walls) {
+                (true, true) => (1.0, n - 1.0),
+                (true, false) => (0.0, n),
+                _ => (0.0, n - 1.0),
             };
-            let fd = f[d].clamp(0.0, hi);
-            let fl = fd.floor().min((hi - 1.0).max(0.0));
+            let fd = f[d].clamp(lo, hi);
+            let fl = fd.floor().min((hi - 1.0).max(lo));
             i0[d] = fl as isize;
             t[d] = fd - fl;
         }
-        let mut acc = 0.0;
+        let mut idx = [NONE; 8];
+        let mut ws = [0.0; 8];
         for dz in 0..2 {
             let wz = if dz == 0 { 1.0 - t[2] } else { t[2] };
             for dy in 0..2 {
                 let wy = if dy == 0 { 1.0 - t[1] } else { t[1] };
                 for dxi in 0..2 {
                     let wx = if dxi == 0 { 1.0 - t[0] } else { t[0] };
-                    let w = wx * wy * wz;
-                    if w == 0.0 {
-                        continue;
-                    }
+                    let k = ((dz * 2 + dy) * 2 + dxi) as usize;
                     if let Some(s) = self.slot(i0[0] + dxi, i0[1] + dy, i0[2] + dz) {
-                        acc += w * field[s];
+                        idx[k] = s as u32;
+                        ws[k] = wx * wy * wz;
                     }
                 }
             }
         }
-        acc
+        (idx, ws)
     }
 
     /// Grid velocity at `x` (m/s).

@@ -7,11 +7,16 @@
 //! particles are counting-sorted by cell first), so every face is written by
 //! one thread in a fixed order: the result does not depend on the thread count.
 //! The same pass builds the liquid level set at cell centres,
-//! `φ_c = min_p (|x_c − x_p| − k r_p)` (k = `surface_radius`), whose zero
+//! `φ_c = min_p |x_c − x_p| − k Δx` (k = `surface_radius`, 0.75 by default:
+//! larger than the widest gap of a Δx/2 lattice, so no spurious air cells open
+//! inside the liquid, where they would let it collapse), whose zero
 //! crossing the ghost-fluid projection uses.
 //!
 //! G2P (step 8): `u_p ← α (u_p + Δu_grid(x_p)) + (1 − α) u_grid(x_p)` with α the
-//! FLIP fraction and `Δu_grid = u^{n+1} − u^{P2G}` on the faces.
+//! FLIP fraction and `Δu_grid = u^{n+1} − u^{P2G}` on the faces; the
+//! increment is sampled with the wall faces replaced by their interior
+//! neighbours ([`MacGrid::stencil_clamped`]), otherwise a particle resting
+//! next to a wall keeps a growing normal velocity that the grid never sees.
 
 use super::{MacGrid, NONE};
 use crate::math::{Real, Vec3};
@@ -83,62 +88,24 @@ pub fn particles_to_grid(
     let ns = grid.slots();
     let g: &MacGrid = grid;
     let inv_dx = 1.0 / g.dx;
-    let mut valid: Valid = Default::default();
-    let mut u: [Vec<Real>; 3] = Default::default();
-    for a in 0..3 {
-        let (vals, flags): (Vec<Real>, Vec<u8>) = (0..ns)
-            .into_par_iter()
-            .map(|s| {
-                if !g.in_domain(s) || g.weight[a][s] == 0.0 {
-                    return (0.0, 0);
-                }
-                let c = g.cell(s);
-                let mut f = Vec3::new(c[0] as Real + 0.5, c[1] as Real + 0.5, c[2] as Real + 0.5);
-                f[a] -= 0.5;
-                let (mut num, mut den) = (0.0, 0.0);
-                for dz in -1..=1isize {
-                    for dy in -1..=1isize {
-                        for dxi in -1..=1isize {
-                            let off = [dxi, dy, dz];
-                            if off[a] == 1 {
-                                continue;
-                            }
-                            let Some(t) = g.slot(c[0] + dxi, c[1] + dy, c[2] + dz) else {
-                                continue;
-                            };
-                            for &p in sort.in_slot(t) {
-                                let p = p as usize;
-                                let q = (parts.x[p] - g.origin) * inv_dx;
-                                let w = (1.0 - (q.x - f.x).abs()).max(0.0)
-                                    * (1.0 - (q.y - f.y).abs()).max(0.0)
-                                    * (1.0 - (q.z - f.z).abs()).max(0.0);
-                                if w > 0.0 {
-                                    num += w * parts.mass[p] * parts.v[p][a];
-                                    den += w * parts.mass[p];
-                                }
-                            }
-                        }
-                    }
-                }
-                if den > 0.0 {
-                    (num / den, 1)
-                } else {
-                    (0.0, 0)
-                }
-            })
-            .unzip();
-        u[a] = vals;
-        valid[a] = flags;
+    let r_ls = surface_radius * g.dx;
+    #[inline]
+    fn hat(t: Real) -> Real {
+        (1.0 - t.abs()).max(0.0)
     }
-    let phi: Vec<Real> = (0..ns)
+    // one gather over the 27 cells around each slot gives its three lower
+    // faces (weights relative to the slot's lower corner) and φ at its centre
+    let per_slot: Vec<([Real; 3], [u8; 3], Real)> = (0..ns)
         .into_par_iter()
         .map(|s| {
             if !g.in_domain(s) {
-                return g.dx;
+                return ([0.0; 3], [0; 3], g.dx);
             }
             let c = g.cell(s);
-            let xc = g.cell_pos(s);
-            let mut best = g.dx;
+            let corner = Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real);
+            let mut num = [0.0; 3];
+            let mut den = [0.0; 3];
+            let mut d2min = Real::INFINITY;
             for dz in -1..=1isize {
                 for dy in -1..=1isize {
                     for dxi in -1..=1isize {
@@ -147,15 +114,45 @@ pub fn particles_to_grid(
                         };
                         for &p in sort.in_slot(t) {
                             let p = p as usize;
-                            let d = (parts.x[p] - xc).norm() - surface_radius * parts.radius[p];
-                            best = best.min(d);
+                            let r = (parts.x[p] - g.origin) * inv_dx - corner;
+                            let h0 = [hat(r.x), hat(r.y), hat(r.z)];
+                            let h5 = [hat(r.x - 0.5), hat(r.y - 0.5), hat(r.z - 0.5)];
+                            let m = parts.mass[p];
+                            let w = [
+                                h0[0] * h5[1] * h5[2],
+                                h5[0] * h0[1] * h5[2],
+                                h5[0] * h5[1] * h0[2],
+                            ];
+                            for a in 0..3 {
+                                if w[a] > 0.0 {
+                                    num[a] += w[a] * m * parts.v[p][a];
+                                    den[a] += w[a] * m;
+                                }
+                            }
+                            let e = r - Vec3::repeat(0.5);
+                            d2min = d2min.min(e.norm_squared());
                         }
                     }
                 }
             }
-            best
+            let mut u = [0.0; 3];
+            let mut f = [0u8; 3];
+            for a in 0..3 {
+                if den[a] > 0.0 && g.weight[a][s] > 0.0 {
+                    u[a] = num[a] / den[a];
+                    f[a] = 1;
+                }
+            }
+            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx))
         })
         .collect();
+    let mut valid: Valid = Default::default();
+    let mut u: [Vec<Real>; 3] = Default::default();
+    for a in 0..3 {
+        u[a] = per_slot.iter().map(|x| x.0[a]).collect();
+        valid[a] = per_slot.iter().map(|x| x.1[a]).collect();
+    }
+    let phi: Vec<Real> = per_slot.iter().map(|x| x.2).collect();
     // The distance to the nearest particle is not a distance to the surface
     // deep inside the liquid; one Jacobi pass of the Lipschitz bound
     // φ_c ← min(φ_c, max_n φ_n − Δx) over cells whose six neighbours are all
@@ -214,12 +211,22 @@ pub fn grid_to_particles(grid: &MacGrid, parts: &mut Particles, flip: Real) {
             if *c != Codim::Volume {
                 return;
             }
-            let pic = grid.velocity(x);
-            let dv = Vec3::new(
-                grid.sample(&delta[0], 0, x),
-                grid.sample(&delta[1], 1, x),
-                grid.sample(&delta[2], 2, x),
-            );
+            let mut pic = Vec3::zeros();
+            let mut dv = Vec3::zeros();
+            for a in 0..3 {
+                let (idx, w) = grid.stencil(a, x);
+                for k in 0..8 {
+                    if idx[k] != NONE {
+                        pic[a] += w[k] * grid.u[a][idx[k] as usize];
+                    }
+                }
+                let (idx, w) = grid.stencil_clamped(a, x, true);
+                for k in 0..8 {
+                    if idx[k] != NONE {
+                        dv[a] += w[k] * delta[a][idx[k] as usize];
+                    }
+                }
+            }
             *v = (*v + dv) * flip + pic * (1.0 - flip);
         });
 }

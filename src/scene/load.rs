@@ -86,16 +86,27 @@ pub fn load_str(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = clean_path(&e.path().to_string());
         let inner = e.inner();
+        let reason = strip_location(&inner.to_string());
+        // Values inside tagged list items are buffered by serde, so the
+        // parser's location points at the list; walk the text instead, down
+        // to the offending key when the message names one.
         let (line, column) = match inner.location() {
-            Some(l) if !path.is_empty() || l.line() > 1 || l.column() > 1 => (l.line(), l.column()),
-            _ => locate(text, &path),
+            Some(l)
+                if !path.contains('[') && (!path.is_empty() || l.line() > 1 || l.column() > 1) =>
+            {
+                (l.line(), l.column())
+            }
+            _ => match unknown_key(&reason) {
+                Some(k) => locate(text, &format!("{path}.{k}")),
+                None => locate(text, &path),
+            },
         };
         SceneError::Parse {
             file: file.to_path_buf(),
             path: if path.is_empty() { ".".into() } else { path },
             line,
             column,
-            reason: strip_location(&inner.to_string()),
+            reason,
         }
     })?;
     validate(&scene).map_err(|(path, reason)| {
@@ -109,6 +120,12 @@ pub fn load_str(text: &str, file: &Path) -> Result<Scene, SceneError> {
         }
     })?;
     Ok(scene)
+}
+
+/// The key named by an "unknown field `k`" message.
+fn unknown_key(msg: &str) -> Option<&str> {
+    let rest = msg.split("unknown field `").nth(1)?;
+    rest.split('`').next()
 }
 
 /// serde_path_to_error writes `.` for the root and `?` for unknown parts.

@@ -119,7 +119,7 @@ pub struct SolverSettings {
     /// Iteration cap of each viscosity PCG.
     #[serde(default = "default_iters")]
     pub viscosity_max_iterations: u32,
-    /// Radius of a particle's sphere in the liquid level set, relative to its own radius.
+    /// Radius of each particle's sphere in the liquid level set, relative to Δx.
     #[serde(default = "default_surface_radius")]
     pub surface_radius: f64,
 }
@@ -258,7 +258,7 @@ fn default_iters() -> u32 {
     1000
 }
 fn default_surface_radius() -> f64 {
-    1.5
+    0.75
 }
 fn default_spacing() -> f64 {
     1.0 / 3.0

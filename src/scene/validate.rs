@@ -258,10 +258,13 @@ pub fn validate(s: &Scene) -> Check {
     if so.viscosity_max_iterations == 0 {
         return fail("solver.viscosity_max_iterations", "must be at least 1");
     }
-    if !(so.surface_radius.is_finite() && (1.0..=4.0).contains(&so.surface_radius)) {
+    if !(so.surface_radius.is_finite() && (0.5..=2.0).contains(&so.surface_radius)) {
         return fail(
             "solver.surface_radius",
-            format!("must be in [1, 4], got {}", so.surface_radius),
+            format!(
+                "must be in [0.5, 2] (relative to dx), got {}",
+                so.surface_radius
+            ),
         );
     }
     if s.bodies.is_empty() {
