@@ -18,7 +18,7 @@
 //! monolithic tension/coupling solve of §7 replaces the projection call.
 
 use crate::advect::{advect, AdvectInfo};
-use crate::grid::extrapolate::{constrain_solids, extrapolate, extrapolate_component};
+use crate::grid::extrapolate::{constrain_solids, extrapolate};
 use crate::grid::pcg::{NotFinite, PcgParams, SolveInfo};
 use crate::grid::projection::{project, ProjectionInfo};
 use crate::grid::transfer::{grid_to_particles, particles_to_grid, sort_particles};
@@ -236,11 +236,7 @@ pub fn step(
         "projection",
         || -> Result<ProjectionInfo, NotFinite> {
             let (pi, mut valid) = project(grid, solids, p.pressure)?;
-            for a in 0..3 {
-                let mut f = std::mem::take(&mut grid.u[a]);
-                extrapolate_component(grid, &mut f, &mut valid[a], a, p.margin + 1);
-                grid.u[a] = f;
-            }
+            extrapolate(grid, &mut valid, p.margin + 1);
             constrain_solids(grid, solids);
             Ok(pi)
         },

@@ -53,11 +53,17 @@ fn resumed_runs_are_byte_identical_to_straight_runs() {
         let name = ply::frame_name(f);
         let x = std::fs::read(a.join("resume").join(&name)).unwrap();
         let y = std::fs::read(b.join("resume").join(&name)).unwrap();
-        assert!(x == y, "frame {f} differs between the straight and the resumed run");
+        assert!(
+            x == y,
+            "frame {f} differs between the straight and the resumed run"
+        );
     }
     let m = Manifest::read(&b.join("resume/manifest.json")).unwrap();
     assert_eq!(m.frames_written, 10);
-    assert_eq!(m.frames.iter().map(|r| r.frame).collect::<Vec<_>>(), (0..=10).collect::<Vec<_>>());
+    assert_eq!(
+        m.frames.iter().map(|r| r.frame).collect::<Vec<_>>(),
+        (0..=10).collect::<Vec<_>>()
+    );
     let last = &m.frames[10];
     assert!(last.viscosity.solves > 0 && last.stage_s["viscosity"] > 0.0);
     assert!(last.pressure.solves == last.substeps && last.pressure.iterations_max > 0);
@@ -96,34 +102,73 @@ fn sim_and_preview_commands_work_end_to_end() {
     let exe = env!("CARGO_BIN_EXE_codimfx");
     let out = dir.path().join("cache");
     let st = Command::new(exe)
-        .args(["sim", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--frames", "3", "--threads", "2"])
+        .args([
+            "sim",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--frames",
+            "3",
+            "--threads",
+            "2",
+        ])
         .output()
         .unwrap();
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
     let err = String::from_utf8_lossy(&st.stderr);
     assert!(err.contains("| projection |"), "no stage summary in: {err}");
     let cache = out.join("cli");
     assert!(cache.join("particles.0003.ply").exists());
     let st = Command::new(exe)
-        .args(["preview", cache.to_str().unwrap(), "--frames", "1-3", "--width", "160", "--height", "90"])
+        .args([
+            "preview",
+            cache.to_str().unwrap(),
+            "--frames",
+            "1-3",
+            "--width",
+            "160",
+            "--height",
+            "90",
+        ])
         .output()
         .unwrap();
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
     for f in ["frame.0001.png", "frame.0003.png", "contact_sheet.png"] {
-        let img = image::open(cache.join("preview").join(f)).unwrap().to_rgb8();
+        let img = image::open(cache.join("preview").join(f))
+            .unwrap()
+            .to_rgb8();
         assert!(img.width() >= 160);
         // some pixels show liquid (blue dominant)
-        let blue = img.pixels().filter(|p| p[2] > 120 && p[2] > p[0] + 40).count();
+        let blue = img
+            .pixels()
+            .filter(|p| p[2] > 120 && p[2] > p[0] + 40)
+            .count();
         assert!(blue > 50, "{f}: {blue} liquid pixels");
     }
     // a bad scene fails with the file and field in the message, before any work
     std::fs::write(&scene, SCENE.replace("dx: 0.0125", "dx: -1")).unwrap();
     let st = Command::new(exe)
-        .args(["sim", scene.to_str().unwrap(), "-o", dir.path().join("bad").to_str().unwrap()])
+        .args([
+            "sim",
+            scene.to_str().unwrap(),
+            "-o",
+            dir.path().join("bad").to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(!st.status.success());
     let err = String::from_utf8_lossy(&st.stderr);
-    assert!(err.contains("cli.yaml:2:") && err.contains("domain.dx"), "{err}");
+    assert!(
+        err.contains("cli.yaml:2:") && err.contains("domain.dx"),
+        "{err}"
+    );
     assert!(!dir.path().join("bad").exists());
 }

@@ -72,9 +72,9 @@ pub fn extrapolate_component(
 
 /// Extrapolates all three components of `grid.u`.
 pub fn extrapolate(g: &mut MacGrid, valid: &mut Valid, layers: usize) {
-    for a in 0..3 {
+    for (a, va) in valid.iter_mut().enumerate() {
         let mut f = std::mem::take(&mut g.u[a]);
-        extrapolate_component(g, &mut f, &mut valid[a], a, layers);
+        extrapolate_component(g, &mut f, va, a, layers);
         g.u[a] = f;
     }
 }

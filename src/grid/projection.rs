@@ -26,6 +26,9 @@ use rayon::prelude::*;
 /// Smallest ghost-fluid fraction used (a counted clamp below it).
 pub const THETA_MIN: Real = 0.01;
 
+/// One matrix row: diagonal, +x/+y/+z neighbours and coefficients, −x/−y/−z neighbours, rhs, θ clamps.
+type Row = (Real, [u32; 3], [Real; 3], [u32; 3], Real, usize);
+
 /// What the projection did.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ProjectionInfo {
@@ -84,7 +87,7 @@ pub fn project(
         }
     }
     let phi_at = |t: Option<usize>| t.map_or(dx, |t| phi[t]);
-    let rows: Vec<(Real, [u32; 3], [Real; 3], [u32; 3], Real, usize)> = cells
+    let rows: Vec<Row> = cells
         .par_iter()
         .map(|&s| {
             let mut diag = 0.0;

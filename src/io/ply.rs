@@ -217,7 +217,7 @@ pub fn decode(bytes: &[u8], path: &str) -> Result<Frame, PlyError> {
             codim,
         );
         p.id[i] = g(&cid) as u64;
-        let n = Vec3::from_fn(|d, _| cn[d].as_ref().map_or(0.0, |c| g(c)));
+        let n = Vec3::from_fn(|d, _| cn[d].as_ref().map_or(0.0, &g));
         f.frame_vec.push(n);
     }
     p.next_id = p.id.iter().max().map_or(0, |m| m + 1);
