@@ -220,7 +220,13 @@ pub fn grid_to_particles(grid: &MacGrid, parts: &mut Particles, flip: Real) {
                         pic[a] += w[k] * grid.u[a][idx[k] as usize];
                     }
                 }
-                let (idx, w) = grid.stencil_clamped(a, x, true);
+                // the two stencils differ only within a cell of a wall
+                let qa = (x[a] - grid.origin[a]) / grid.dx;
+                let (idx, w) = if qa < 1.0 || qa > grid.n[a] as Real - 1.0 {
+                    grid.stencil_clamped(a, x, true)
+                } else {
+                    (idx, w)
+                };
                 for k in 0..8 {
                     if idx[k] != NONE {
                         dv[a] += w[k] * delta[a][idx[k] as usize];
