@@ -183,6 +183,18 @@ pub fn add_body_force(parts: &mut Particles, accel: Vec3, dt: Real) {
     }
 }
 
+/// In debug builds, fails when a stage left a non-finite particle (release
+/// builds check once per substep, after the advection, and before every cache write).
+fn debug_check(p: &Particles, stage: &'static str) -> Result<(), StepError> {
+    if cfg!(debug_assertions) {
+        let count = count_non_finite(p);
+        if count > 0 {
+            return Err(StepError::NonFinite { stage, count });
+        }
+    }
+    Ok(())
+}
+
 fn count_non_finite(p: &Particles) -> usize {
     p.x.iter()
         .zip(&p.v)
@@ -210,6 +222,7 @@ pub fn step(
     timed(times, "body_force", || {
         add_body_force(particles, p.accel, dt)
     });
+    debug_check(particles, "body_force")?;
     // 5: particles → grid
     timed(times, "p2g", || {
         grid.activate(&particles.x, p.margin);
@@ -244,6 +257,7 @@ pub fn step(
     info.pressure = proj.map_err(StepError::Pressure)?;
     // 8: grid → particles
     timed(times, "g2p", || grid_to_particles(grid, particles, p.flip));
+    debug_check(particles, "g2p")?;
     // 1: advection (first step of the next cycle of Algorithm 1)
     info.advect = timed(times, "advect", || {
         advect(particles, grid, solids, p.lo, p.hi, dt)

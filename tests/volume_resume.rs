@@ -172,3 +172,24 @@ fn sim_and_preview_commands_work_end_to_end() {
     );
     assert!(!dir.path().join("bad").exists());
 }
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("resume.yaml");
+    std::fs::write(&scene, SCENE).unwrap();
+    for threads in [1, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let out = dir.path().join(format!("t{threads}"));
+        pool.install(|| run(&scene, &out, 3, false));
+    }
+    for f in 1..=3 {
+        let name = ply::frame_name(f);
+        let x = std::fs::read(dir.path().join("t1/resume").join(&name)).unwrap();
+        let y = std::fs::read(dir.path().join("t3/resume").join(&name)).unwrap();
+        assert!(x == y, "frame {f} differs between 1 and 3 threads");
+    }
+}
