@@ -19,3 +19,11 @@ pub mod validate;
 
 pub use math::{Real, Vec3};
 pub use particles::{Codim, Particles};
+pub mod advect;
+pub mod grid;
+pub mod io;
+pub mod preview;
+pub mod scene;
+pub mod sim;
+pub mod solids;
+pub mod step;

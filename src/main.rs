@@ -19,6 +19,10 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// Check the MLS operators against analytic solutions (sphere diffusion, curvature, butterfly).
     Validate(cli::validate::ValidateArgs),
+    /// Simulate a scene file into a particle cache (PLY per frame + manifest.json).
+    Sim(cli::sim::SimArgs),
+    /// Render PNG previews and a contact sheet of a particle cache.
+    Preview(cli::preview::PreviewArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -26,5 +30,7 @@ fn main() -> anyhow::Result<()> {
     match cli.command {
         Command::Bench(a) => cli::bench::run(a),
         Command::Validate(a) => cli::validate::run(a),
+        Command::Sim(a) => cli::sim::run(a),
+        Command::Preview(a) => cli::preview::run(a),
     }
 }

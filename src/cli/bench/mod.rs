@@ -3,6 +3,7 @@ use clap::{Args, Subcommand};
 
 mod neighbors;
 mod operators;
+mod volume;
 
 /// Arguments of `codimfx bench`.
 #[derive(Args, Debug)]
@@ -17,6 +18,8 @@ enum BenchTarget {
     Neighbors(neighbors::NeighborsArgs),
     /// MLS operators: time per stage, and sphere-diffusion error against run time.
     Operators(operators::OperatorsArgs),
+    /// PIC/FLIP volume solver: ms per substep per stage on a 250k-particle dam break.
+    Volume(volume::VolumeArgs),
 }
 
 /// Runs the chosen benchmark.
@@ -24,5 +27,6 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
     match a.target {
         BenchTarget::Neighbors(x) => neighbors::run(x),
         BenchTarget::Operators(x) => operators::run(x),
+        BenchTarget::Volume(x) => volume::run(x),
     }
 }

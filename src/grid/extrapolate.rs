@@ -1,0 +1,105 @@
+//! Velocity extrapolation and the solid boundary condition on faces.
+//!
+//! After P2G and after the projection only faces next to liquid hold
+//! meaningful velocities. Particle advection and G2P sample a few cells past
+//! the liquid, so the values are extended layer by layer: a face without a
+//! value takes the average of its valid 6-neighbours of the same component
+//! (Jacobi sweeps, so the result does not depend on the visiting order).
+//! Faces inside static solids are then set to the extrapolated velocity minus
+//! its normal component (free slip, solid velocity 0; Bridson 2015 §4.3).
+
+use super::transfer::Valid;
+use super::MacGrid;
+use crate::math::{Real, Vec3};
+use crate::solids::SolidSet;
+use rayon::prelude::*;
+
+const OFFS: [[isize; 3]; 6] = [
+    [-1, 0, 0],
+    [1, 0, 0],
+    [0, -1, 0],
+    [0, 1, 0],
+    [0, 0, -1],
+    [0, 0, 1],
+];
+
+/// True for faces on or past the domain walls (always 0, never extrapolated).
+#[inline]
+pub fn is_wall_face(g: &MacGrid, s: usize, a: usize) -> bool {
+    !g.in_domain(s) || g.cell(s)[a] == 0
+}
+
+/// Extends `field` (component `a`) from its valid faces by `layers` layers.
+pub fn extrapolate_component(
+    g: &MacGrid,
+    field: &mut [Real],
+    valid: &mut [u8],
+    a: usize,
+    layers: usize,
+) {
+    for _ in 0..layers {
+        let upd: Vec<Option<Real>> = (0..field.len())
+            .into_par_iter()
+            .map(|s| {
+                if valid[s] != 0 || is_wall_face(g, s, a) {
+                    return None;
+                }
+                let (mut sum, mut cnt) = (0.0, 0);
+                for o in OFFS {
+                    if let Some(t) = g.neighbor(s, o) {
+                        if valid[t] != 0 {
+                            sum += field[t];
+                            cnt += 1;
+                        }
+                    }
+                }
+                (cnt > 0).then(|| sum / cnt as Real)
+            })
+            .collect();
+        let mut any = false;
+        for (s, v) in upd.into_iter().enumerate() {
+            if let Some(v) = v {
+                field[s] = v;
+                valid[s] = 1;
+                any = true;
+            }
+        }
+        if !any {
+            break;
+        }
+    }
+}
+
+/// Extrapolates all three components of `grid.u`.
+pub fn extrapolate(g: &mut MacGrid, valid: &mut Valid, layers: usize) {
+    for (a, va) in valid.iter_mut().enumerate() {
+        let mut f = std::mem::take(&mut g.u[a]);
+        extrapolate_component(g, &mut f, va, a, layers);
+        g.u[a] = f;
+    }
+}
+
+/// Free-slip condition on faces closed by an interior solid: removes the
+/// normal component of the (extrapolated) velocity there.
+pub fn constrain_solids(g: &mut MacGrid, solids: &SolidSet) {
+    if solids.is_empty() {
+        return;
+    }
+    let h = 1e-3 * g.dx;
+    let grid: &MacGrid = g;
+    let newu: [Vec<Real>; 3] = [0, 1, 2].map(|a| {
+        (0..grid.slots())
+            .into_par_iter()
+            .map(|s| {
+                if is_wall_face(grid, s, a) || grid.weight[a][s] > 0.0 {
+                    return grid.u[a][s];
+                }
+                let x = grid.face_pos(s, a);
+                let v: Vec3 = grid.velocity(&x);
+                let n = solids.normal(&x, h);
+                v[a] - v.dot(&n) * n[a]
+            })
+            .collect()
+    });
+    g.u = newu;
+}

@@ -1,0 +1,222 @@
+//! Pressure projection, Algorithm 1 step 7 (the volumetric part; the
+//! monolithic surface-tension coupling of §7 will add its particle and
+//! impulse blocks to this system).
+//!
+//! With the scaled pressure `q = p Δt / (ρ Δx)` (m/s) the update is
+//! `u_f ← u_f − (q_{c+} − q_{c−})` and incompressibility of every liquid cell,
+//! weighted by the open face fractions `w_f` of the cut-cell method (Batty,
+//! Bertails & Bridson 2007), gives the SPD system
+//!
+//! `Σ_f w_f (q_c − q_n) / θ_f = −Σ_f w_f u_f·n_f`,
+//!
+//! where `θ_f = 1` between liquid cells and, across the free surface, `θ_f =
+//! φ_c / (φ_c − φ_n)` is the ghost-fluid interface fraction (Enright, Nguyen,
+//! Gibou & Fedkiw 2003) so that the pressure vanishes at the level set's zero
+//! crossing (p = 0 at the surface, σ = 0). θ is clamped to ≥ 0.01 and the
+//! clamps are counted. Solved by PCG with MIC(0) ([`super::pcg`]).
+
+use super::extrapolate::is_wall_face;
+use super::pcg::{pcg, NotFinite, PcgParams, SolveInfo, Stencil7};
+use super::transfer::Valid;
+use super::{MacGrid, NONE};
+use crate::math::Real;
+use crate::solids::SolidSet;
+use rayon::prelude::*;
+
+/// Smallest ghost-fluid fraction used (a counted clamp below it).
+pub const THETA_MIN: Real = 0.01;
+
+/// One matrix row: diagonal, +x/+y/+z neighbours and coefficients, −x/−y/−z neighbours, rhs, θ clamps.
+type Row = (Real, [u32; 3], [Real; 3], [u32; 3], Real, usize);
+
+/// What the projection did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ProjectionInfo {
+    /// The PCG solve.
+    pub solve: SolveInfo,
+    /// Pressure unknowns (liquid cells).
+    pub cells: usize,
+    /// Free-surface faces whose θ was clamped to [`THETA_MIN`].
+    pub theta_clamps: usize,
+}
+
+#[inline]
+fn theta(phi_in: Real, phi_out: Real) -> (Real, bool) {
+    let t = phi_in / (phi_in - phi_out);
+    if t < THETA_MIN {
+        (THETA_MIN, true)
+    } else {
+        (t.min(1.0), false)
+    }
+}
+
+/// Projects `grid.u` to be divergence free in the liquid; returns the faces that hold a projected value.
+pub fn project(
+    grid: &mut MacGrid,
+    solids: &SolidSet,
+    prm: PcgParams,
+) -> Result<(ProjectionInfo, Valid), NotFinite> {
+    let g: &MacGrid = grid;
+    let ns = g.slots();
+    let dx = g.dx;
+    // Liquid level set extended half a cell into solids (Batty et al. 2007), so
+    // liquid resting on a cut-cell solid has no spurious free surface there.
+    let phi: Vec<Real> = (0..ns)
+        .into_par_iter()
+        .map(|s| {
+            let p = g.phi[s];
+            if !solids.is_empty() && p < 0.5 * dx && solids.phi(&g.cell_pos(s)) < 0.0 {
+                p.min(-0.5 * dx)
+            } else {
+                p
+            }
+        })
+        .collect();
+    let open = |s: usize, a: usize| -> Real {
+        match g.neighbor(s, unit(a, 1)) {
+            Some(t) => g.weight[a][s] + g.weight[a][t],
+            None => g.weight[a][s],
+        }
+    };
+    let mut index = vec![NONE; ns];
+    let mut cells = Vec::new();
+    for s in 0..ns {
+        if g.in_domain(s) && phi[s] < 0.0 && (0..3).map(|a| open(s, a)).sum::<Real>() > 0.0 {
+            index[s] = cells.len() as u32;
+            cells.push(s);
+        }
+    }
+    let phi_at = |t: Option<usize>| t.map_or(dx, |t| phi[t]);
+    let rows: Vec<Row> = cells
+        .par_iter()
+        .map(|&s| {
+            let mut diag = 0.0;
+            let mut up = [NONE; 3];
+            let mut lo = [NONE; 3];
+            let mut off = [0.0; 3];
+            let mut rhs = 0.0;
+            let mut clamps = 0;
+            for a in 0..3 {
+                let w_lo = g.weight[a][s];
+                if w_lo > 0.0 {
+                    let n = g.neighbor(s, unit(a, -1));
+                    rhs += w_lo * g.u[a][s];
+                    match n.map(|n| index[n]) {
+                        Some(i) if i != NONE => {
+                            diag += w_lo;
+                            lo[a] = i;
+                        }
+                        _ => {
+                            let (th, c) = theta(phi[s], phi_at(n));
+                            clamps += c as usize;
+                            diag += w_lo / th;
+                        }
+                    }
+                }
+                let t = g.neighbor(s, unit(a, 1));
+                let w_hi = t.map_or(0.0, |t| g.weight[a][t]);
+                if w_hi > 0.0 {
+                    let t = t.unwrap_or(0);
+                    rhs -= w_hi * g.u[a][t];
+                    if index[t] != NONE {
+                        diag += w_hi;
+                        up[a] = index[t];
+                        off[a] = -w_hi;
+                    } else {
+                        let (th, c) = theta(phi[s], phi[t]);
+                        clamps += c as usize;
+                        diag += w_hi / th;
+                    }
+                }
+            }
+            (diag, up, off, lo, rhs, clamps)
+        })
+        .collect();
+    let mut a = Stencil7::default();
+    let mut b = Vec::with_capacity(rows.len());
+    let mut theta_clamps = 0;
+    for (d, up, off, lo, r, c) in rows {
+        a.diag.push(d);
+        a.up.push(up);
+        a.off.push(off);
+        a.lo.push(lo);
+        b.push(r);
+        theta_clamps += c;
+    }
+    let mut q = vec![0.0; a.len()];
+    let solve = pcg(&a, &b, &mut q, prm)?;
+    // velocity update on every open face next to liquid
+    let qv = |s: usize| {
+        if index[s] == NONE {
+            None
+        } else {
+            Some(q[index[s] as usize])
+        }
+    };
+    let mut valid: Valid = Default::default();
+    let mut newu: [Vec<Real>; 3] = Default::default();
+    for ax in 0..3 {
+        let (nu, vf): (Vec<Real>, Vec<u8>) = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                if is_wall_face(g, s, ax) || g.weight[ax][s] == 0.0 {
+                    return (0.0, 0);
+                }
+                let l = g.neighbor(s, unit(ax, -1));
+                let ql = l.and_then(qv);
+                let qs = qv(s);
+                let u = g.u[ax][s];
+                match (ql, qs) {
+                    (Some(ql), Some(qs)) => (u - (qs - ql), 1),
+                    (Some(ql), None) => {
+                        let (th, _) = theta(phi_at(l), phi[s]);
+                        (u + ql / th, 1)
+                    }
+                    (None, Some(qs)) => {
+                        let (th, _) = theta(phi[s], phi_at(l));
+                        (u - qs / th, 1)
+                    }
+                    (None, None) => (u, 0),
+                }
+            })
+            .unzip();
+        newu[ax] = nu;
+        valid[ax] = vf;
+    }
+    grid.u = newu;
+    Ok((
+        ProjectionInfo {
+            solve,
+            cells: cells.len(),
+            theta_clamps,
+        },
+        valid,
+    ))
+}
+
+/// Offset of `k` cells along axis `a`.
+#[inline]
+pub fn unit(a: usize, k: isize) -> [isize; 3] {
+    let mut o = [0; 3];
+    o[a] = k;
+    o
+}
+
+/// Largest |divergence|·Δx over liquid cells (m/s): the discrete
+/// incompressibility residual, for tests.
+pub fn max_divergence(g: &MacGrid) -> Real {
+    (0..g.slots())
+        .into_par_iter()
+        .filter(|&s| g.in_domain(s) && g.phi[s] < 0.0)
+        .map(|s| {
+            let mut d = 0.0;
+            for a in 0..3 {
+                let hi = g
+                    .neighbor(s, unit(a, 1))
+                    .map_or(0.0, |t| g.weight[a][t] * g.u[a][t]);
+                d += hi - g.weight[a][s] * g.u[a][s];
+            }
+            d.abs()
+        })
+        .reduce(|| 0.0, Real::max)
+}

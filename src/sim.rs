@@ -1,0 +1,349 @@
+//! The frame loop: CFL substepping, per-frame caches, resume and stopping.
+//!
+//! Each frame advances the state to `t = frame / fps` in substeps of
+//! `Δt = min(cfl Δx / (max|u| + √(Δx|a|)), max_dt)`, never leaving a sliver
+//! shorter than half the previous substep before the frame's end. After a
+//! frame the particles are written to `particles.NNNN.ply` and the manifest is
+//! updated, both through a temporary name and a rename, so a frame appears
+//! only when complete. Since a substep depends only on the particle state
+//! (`step` module docs) and the caches hold positions and velocities in double
+//! precision, `resume` continues from the last complete frame bit for bit.
+//! A stop flag (Ctrl-C in the binary) is checked after every frame.
+
+use crate::grid::MacGrid;
+use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed};
+use crate::io::ply::{self, frame_name, PlyError};
+use crate::io::write_atomic;
+use crate::math::{Real, Vec3};
+use crate::particles::{Codim, Particles};
+use crate::scene::{self, sample_bodies, Scene, SceneError};
+use crate::solids::SolidSet;
+use crate::step::{cfl_dt, step, SimState, StageTimes, StepError, StepParams};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Why a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The scene did not load.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// File system error.
+    #[error("{path}: {source}")]
+    Io {
+        /// Path.
+        path: PathBuf,
+        /// Underlying error.
+        source: std::io::Error,
+    },
+    /// Cache file error.
+    #[error(transparent)]
+    Ply(#[from] PlyError),
+    /// Manifest error.
+    #[error(transparent)]
+    Manifest(#[from] ManifestError),
+    /// A substep failed.
+    #[error("frame {frame}, t = {time:.6} s: {source}")]
+    Step {
+        /// Frame being computed.
+        frame: u32,
+        /// Simulated time when it failed (s).
+        time: Real,
+        /// The stage error.
+        source: StepError,
+    },
+    /// The cache cannot be resumed.
+    #[error("cannot resume {dir}: {reason}")]
+    Resume {
+        /// Cache folder.
+        dir: PathBuf,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// How to run.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Parent folder of the cache (the scene's `output.dir`, else `cache`, when `None`).
+    pub out_root: Option<PathBuf>,
+    /// Last frame to simulate (default: the scene's `time.frames`).
+    pub frames: Option<u32>,
+    /// Continue after the last complete frame of an existing cache.
+    pub resume: bool,
+}
+
+/// A run in progress.
+pub struct Sim {
+    /// The scene.
+    pub scene: Scene,
+    /// Cache folder.
+    pub dir: PathBuf,
+    /// Solver state.
+    pub state: SimState,
+    /// Substep parameters.
+    pub params: StepParams,
+    /// The manifest as written so far.
+    pub manifest: Manifest,
+    /// Last complete frame.
+    pub frame: u32,
+    /// Simulated time (s).
+    pub time: Real,
+    /// Last frame to simulate.
+    pub last_frame: u32,
+    /// Stage times summed over the run (s).
+    pub totals: StageTimes,
+    /// Seed samples dropped because they fell inside solids.
+    pub dropped_in_solid: usize,
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SimError + '_ {
+    move |source| SimError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn speed(p: &Particles) -> Speed {
+    if p.is_empty() {
+        return Speed::default();
+    }
+    let (mut mn, mut mx, mut sum) = (Real::INFINITY, 0.0 as Real, 0.0);
+    for v in &p.v {
+        let s = v.norm();
+        mn = mn.min(s);
+        mx = mx.max(s);
+        sum += s;
+    }
+    Speed {
+        min: mn,
+        max: mx,
+        mean: sum / p.len() as Real,
+    }
+}
+
+fn base_record(frame: u32, time: Real, p: &Particles) -> FrameRecord {
+    let c = p.counts();
+    FrameRecord {
+        frame,
+        time,
+        next_id: p.next_id,
+        counts: Codim::ALL
+            .iter()
+            .map(|k| (k.name().to_string(), c[*k as usize]))
+            .collect(),
+        speed: speed(p),
+        total_mass: p.total_mass(),
+        stage_s: StageTimes::default().0,
+        ..Default::default()
+    }
+}
+
+impl Sim {
+    /// Loads the scene and either samples the initial state (writing frame 0)
+    /// or, with `resume`, reads the last complete frame of the existing cache.
+    pub fn open(scene_file: &Path, opt: &RunOptions) -> Result<Sim, SimError> {
+        let text = std::fs::read_to_string(scene_file).map_err(|source| SceneError::Io {
+            file: scene_file.to_path_buf(),
+            source,
+        })?;
+        let scene = scene::load_str(&text, scene_file)?;
+        let name = scene.output.name.clone().unwrap_or_else(|| {
+            scene_file
+                .file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy().into_owned())
+        });
+        let root = opt
+            .out_root
+            .clone()
+            .or_else(|| scene.output.dir.clone().map(PathBuf::from))
+            .unwrap_or_else(|| PathBuf::from("cache"));
+        let dir = root.join(&name);
+        let solids = SolidSet::from_scene(&scene.solids);
+        let params = StepParams::from_scene(&scene);
+        let d = &scene.domain;
+        let grid = MacGrid::new(Vec3::from(d.min), Vec3::from(d.max), d.dx);
+        let last_frame = opt.frames.unwrap_or(scene.time.frames);
+        let mpath = dir.join("manifest.json");
+        let sha = sha256_hex(&text);
+        if opt.resume {
+            let manifest = Manifest::read(&mpath)?;
+            if manifest.scene_sha256 != sha {
+                return Err(SimError::Resume {
+                    dir,
+                    reason: format!(
+                        "the scene file changed since the cache was written (sha256 {} vs {})",
+                        &sha[..12],
+                        &manifest.scene_sha256[..manifest.scene_sha256.len().min(12)]
+                    ),
+                });
+            }
+            let f = manifest.frames_written;
+            let rec = manifest
+                .frames
+                .iter()
+                .find(|r| r.frame == f)
+                .cloned()
+                .ok_or_else(|| SimError::Resume {
+                    dir: dir.clone(),
+                    reason: format!("manifest has no record of frame {f}"),
+                })?;
+            let mut particles = ply::read(&dir.join(frame_name(f)))?.particles;
+            particles.next_id = rec.next_id;
+            let mut manifest = manifest;
+            manifest.frames.retain(|r| r.frame <= f);
+            return Ok(Sim {
+                scene,
+                dir,
+                state: SimState {
+                    particles,
+                    grid,
+                    solids,
+                },
+                params,
+                manifest,
+                frame: f,
+                time: rec.time,
+                last_frame,
+                totals: StageTimes::default(),
+                dropped_in_solid: 0,
+            });
+        }
+        std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
+        // a fresh run replaces an old cache of the same name
+        for e in std::fs::read_dir(&dir).map_err(io_err(&dir))?.flatten() {
+            let n = e.file_name().to_string_lossy().into_owned();
+            if n.starts_with("particles.") && n.ends_with(".ply") {
+                std::fs::remove_file(e.path()).map_err(io_err(&e.path()))?;
+            }
+        }
+        let (particles, rep) = sample_bodies(&scene, &solids);
+        let mut manifest = Manifest {
+            format: "codimfx-cache".into(),
+            version: 1,
+            scene_name: name,
+            scene_file: scene_file.display().to_string(),
+            scene_sha256: sha,
+            scene_yaml: text,
+            fps: scene.time.fps,
+            dx: d.dx,
+            domain_min: d.min,
+            domain_max: d.max,
+            threads: rayon::current_num_threads(),
+            frames_written: 0,
+            frames: Vec::new(),
+        };
+        let bytes = ply::encode(&particles, None, 0, 0.0)?;
+        let p0 = dir.join(frame_name(0));
+        write_atomic(&p0, &bytes).map_err(io_err(&p0))?;
+        manifest.frames.push(base_record(0, 0.0, &particles));
+        manifest.write(&mpath)?;
+        Ok(Sim {
+            scene,
+            dir,
+            state: SimState {
+                particles,
+                grid,
+                solids,
+            },
+            params,
+            manifest,
+            frame: 0,
+            time: 0.0,
+            last_frame,
+            totals: StageTimes::default(),
+            dropped_in_solid: rep.dropped_in_solid,
+        })
+    }
+
+    /// Simulates and writes the next frame; returns its record.
+    pub fn advance_frame(&mut self) -> Result<FrameRecord, SimError> {
+        let wall = Instant::now();
+        let f = self.frame + 1;
+        let t_end = f as Real / self.scene.time.fps;
+        let mut times = StageTimes::default();
+        let mut rec = FrameRecord::default();
+        let (mut dt_min, mut dt_max) = (Real::INFINITY, 0.0 as Real);
+        let mut substeps = 0;
+        let dx = self.scene.domain.dx;
+        while self.time < t_end {
+            let rem = t_end - self.time;
+            let mut dt = cfl_dt(
+                &self.state.particles,
+                dx,
+                self.params.accel,
+                self.scene.time.cfl,
+                self.scene.time.max_dt,
+            );
+            let last = dt >= rem;
+            if last {
+                dt = rem;
+            } else if dt > 0.5 * rem {
+                dt = 0.5 * rem;
+            }
+            let info = step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
+                SimError::Step {
+                    frame: f,
+                    time: self.time,
+                    source,
+                }
+            })?;
+            self.time = if last { t_end } else { self.time + dt };
+            substeps += 1;
+            dt_min = dt_min.min(dt);
+            dt_max = dt_max.max(dt);
+            let s = &info.pressure.solve;
+            rec.pressure.add(s.iterations, s.rel_residual, s.converged);
+            if let Some(v) = info.viscosity {
+                for s in v {
+                    rec.viscosity.add(s.iterations, s.rel_residual, s.converged);
+                }
+            }
+            rec.fallbacks.solid_pushouts += info.advect.solid_pushouts as u64;
+            rec.fallbacks.wall_clamps += info.advect.wall_clamps as u64;
+            rec.fallbacks.theta_clamps += info.pressure.theta_clamps as u64;
+            rec.liquid_volume = info.liquid_volume;
+            rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
+            rec.blocks = rec.blocks.max(info.blocks);
+        }
+        let p = &self.state.particles;
+        let bytes = ply::encode(p, None, f, self.time)?;
+        let path = self.dir.join(frame_name(f));
+        write_atomic(&path, &bytes).map_err(io_err(&path))?;
+        let base = base_record(f, self.time, p);
+        rec = FrameRecord {
+            substeps,
+            dt_min: if substeps > 0 { dt_min } else { 0.0 },
+            dt_max,
+            stage_s: times.0.clone(),
+            wall_s: wall.elapsed().as_secs_f64(),
+            ..FrameRecord { ..rec }
+        };
+        rec.frame = base.frame;
+        rec.time = base.time;
+        rec.next_id = base.next_id;
+        rec.counts = base.counts;
+        rec.speed = base.speed;
+        rec.total_mass = base.total_mass;
+        self.totals.merge(&times);
+        self.frame = f;
+        self.manifest.frames.push(rec.clone());
+        self.manifest.frames_written = f;
+        self.manifest.write(&self.dir.join("manifest.json"))?;
+        Ok(rec)
+    }
+
+    /// Runs frames until `last_frame` or until `stop` is set (checked after each frame).
+    pub fn run(
+        &mut self,
+        stop: &AtomicBool,
+        mut on_frame: impl FnMut(&Sim, &FrameRecord),
+    ) -> Result<(), SimError> {
+        while self.frame < self.last_frame && !stop.load(Ordering::SeqCst) {
+            let r = self.advance_frame()?;
+            on_frame(self, &r);
+        }
+        Ok(())
+    }
+}

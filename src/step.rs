@@ -1,0 +1,287 @@
+//! One substep of the solver, sequencing the stages of the paper's Algorithm 1
+//! that exist so far (the black, PIC/FLIP steps):
+//!
+//! | Alg. 1 | stage | module |
+//! |---|---|---|
+//! | 4 | body force on all particles | [`add_body_force`] |
+//! | 5 | particles → grid (C-0), liquid level set | `grid::transfer` |
+//! | 6 | viscosity on the grid, eq. (13) (skipped when μ = 0) | `grid::viscosity` |
+//! | 7 | projection (ghost-fluid free surface, cut-cell solids) | `grid::projection` |
+//! | 8 | grid → particles, PIC/FLIP | `grid::transfer` |
+//! | 1 | advection (midpoint rule through the grid) | `advect` |
+//!
+//! Algorithm 1 is a cycle; this substep starts at step 4 and ends with the
+//! advection of step 1, so the particle state alone (positions, velocities)
+//! defines the next substep: a run resumed from a cached frame continues bit
+//! for bit. Steps 2–3 (codimension update §8, reseeding §9) go right after
+//! the advection, the MLS viscosity of §5 next to the grid viscosity, and the
+//! monolithic tension/coupling solve of §7 replaces the projection call.
+
+use crate::advect::{advect, AdvectInfo};
+use crate::grid::extrapolate::{constrain_solids, extrapolate};
+use crate::grid::pcg::{NotFinite, PcgParams, SolveInfo};
+use crate::grid::projection::{project, ProjectionInfo};
+use crate::grid::transfer::{grid_to_particles, particles_to_grid, sort_particles};
+use crate::grid::viscosity::viscosity;
+use crate::grid::MacGrid;
+use crate::math::{Real, Vec3};
+use crate::particles::Particles;
+use crate::scene::Scene;
+use crate::solids::SolidSet;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Stage names, in the order they run; every substep reports all of them.
+pub const STAGES: [&str; 6] = [
+    "body_force",
+    "p2g",
+    "viscosity",
+    "projection",
+    "g2p",
+    "advect",
+];
+
+/// Wall time per stage (s), accumulated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StageTimes(pub BTreeMap<String, Real>);
+
+impl Default for StageTimes {
+    fn default() -> Self {
+        StageTimes(STAGES.iter().map(|s| (s.to_string(), 0.0)).collect())
+    }
+}
+
+impl StageTimes {
+    /// Adds `secs` to a stage.
+    pub fn add(&mut self, stage: &str, secs: Real) {
+        *self.0.entry(stage.to_string()).or_insert(0.0) += secs;
+    }
+
+    /// Adds every stage of `other`.
+    pub fn merge(&mut self, other: &StageTimes) {
+        for (k, v) in &other.0 {
+            self.add(k, *v);
+        }
+    }
+
+    /// Sum over stages (s).
+    pub fn total(&self) -> Real {
+        self.0.values().sum()
+    }
+}
+
+fn timed<T>(times: &mut StageTimes, stage: &str, f: impl FnOnce() -> T) -> T {
+    let t = Instant::now();
+    let r = f();
+    times.add(stage, t.elapsed().as_secs_f64());
+    r
+}
+
+/// Solver parameters of a substep, taken from the scene.
+#[derive(Clone, Debug)]
+pub struct StepParams {
+    /// Body acceleration (m/s²).
+    pub accel: Vec3,
+    /// Density ρ (kg/m³).
+    pub density: Real,
+    /// Viscosity μ (Pa·s).
+    pub viscosity: Real,
+    /// FLIP fraction.
+    pub flip: Real,
+    /// Level-set particle radius relative to Δx.
+    pub surface_radius: Real,
+    /// Pressure PCG stopping rule.
+    pub pressure: PcgParams,
+    /// Viscosity PCG stopping rule.
+    pub viscous: PcgParams,
+    /// Blocks are allocated this many cells around particles.
+    pub margin: usize,
+    /// Domain box (m).
+    pub lo: Vec3,
+    /// Domain box (m).
+    pub hi: Vec3,
+}
+
+impl StepParams {
+    /// Parameters of a validated scene.
+    pub fn from_scene(s: &Scene) -> StepParams {
+        let a = s.acceleration();
+        StepParams {
+            accel: Vec3::new(a[0], a[1], a[2]),
+            density: s.physics.density,
+            viscosity: s.physics.viscosity,
+            flip: s.solver.flip,
+            surface_radius: s.solver.surface_radius,
+            pressure: PcgParams {
+                tolerance: s.solver.pressure_tolerance,
+                max_iterations: s.solver.pressure_max_iterations,
+            },
+            viscous: PcgParams {
+                tolerance: s.solver.viscosity_tolerance,
+                max_iterations: s.solver.viscosity_max_iterations,
+            },
+            margin: s.time.cfl.ceil() as usize + 2,
+            lo: Vec3::from(s.domain.min),
+            hi: Vec3::from(s.domain.max),
+        }
+    }
+}
+
+/// Everything a substep reads and writes.
+#[derive(Clone, Debug)]
+pub struct SimState {
+    /// The particle store.
+    pub particles: Particles,
+    /// The sparse MAC grid (rebuilt every substep).
+    pub grid: MacGrid,
+    /// Static solids.
+    pub solids: SolidSet,
+}
+
+/// What one substep did.
+#[derive(Clone, Debug, Default)]
+pub struct SubstepInfo {
+    /// Substep length (s).
+    pub dt: Real,
+    /// Pressure projection record.
+    pub pressure: ProjectionInfo,
+    /// Viscosity solves (x, y, z), `None` when skipped (μ = 0).
+    pub viscosity: Option<[SolveInfo; 3]>,
+    /// Corrections during advection.
+    pub advect: AdvectInfo,
+    /// Liquid volume on the grid after P2G (m³).
+    pub liquid_volume: Real,
+    /// Allocated grid blocks.
+    pub blocks: usize,
+}
+
+/// Why a substep failed.
+#[derive(Debug, thiserror::Error)]
+pub enum StepError {
+    /// The pressure solve produced non-finite values.
+    #[error("pressure projection: {0}")]
+    Pressure(NotFinite),
+    /// A viscosity solve produced non-finite values.
+    #[error("grid viscosity: {0}")]
+    Viscosity(NotFinite),
+    /// Particles with non-finite state after a stage.
+    #[error("{count} particles have non-finite position or velocity after stage `{stage}`")]
+    NonFinite {
+        /// Stage name.
+        stage: &'static str,
+        /// Offending particles.
+        count: usize,
+    },
+}
+
+/// Algorithm 1 step 4: `u ← u + Δt a` on every non-fixed particle.
+pub fn add_body_force(parts: &mut Particles, accel: Vec3, dt: Real) {
+    for (v, f) in parts.v.iter_mut().zip(&parts.fixed) {
+        if !f {
+            *v += accel * dt;
+        }
+    }
+}
+
+/// In debug builds, fails when a stage left a non-finite particle (release
+/// builds check once per substep, after the advection, and before every cache write).
+fn debug_check(p: &Particles, stage: &'static str) -> Result<(), StepError> {
+    if cfg!(debug_assertions) {
+        let count = count_non_finite(p);
+        if count > 0 {
+            return Err(StepError::NonFinite { stage, count });
+        }
+    }
+    Ok(())
+}
+
+fn count_non_finite(p: &Particles) -> usize {
+    p.x.iter()
+        .zip(&p.v)
+        .filter(|(x, v)| !(x.iter().all(|c| c.is_finite()) && v.iter().all(|c| c.is_finite())))
+        .count()
+}
+
+/// Advances the state by one substep of length `dt` (s).
+pub fn step(
+    st: &mut SimState,
+    p: &StepParams,
+    dt: Real,
+    times: &mut StageTimes,
+) -> Result<SubstepInfo, StepError> {
+    let mut info = SubstepInfo {
+        dt,
+        ..Default::default()
+    };
+    let SimState {
+        particles,
+        grid,
+        solids,
+    } = st;
+    // 4: body force
+    timed(times, "body_force", || {
+        add_body_force(particles, p.accel, dt)
+    });
+    debug_check(particles, "body_force")?;
+    // 5: particles → grid
+    timed(times, "p2g", || {
+        grid.activate(&particles.x, p.margin);
+        grid.compute_weights(solids);
+        let sort = sort_particles(grid, particles);
+        let mut valid = particles_to_grid(grid, particles, &sort, p.surface_radius);
+        extrapolate(grid, &mut valid, p.margin + 1);
+        grid.u_old = grid.u.clone();
+    });
+    info.blocks = grid.blocks.len();
+    info.liquid_volume = grid.liquid_volume();
+    // 6: viscosity (grid part of eq. 13; the MLS part for C-1/C-2 goes here too)
+    if p.viscosity > 0.0 {
+        let v = timed(times, "viscosity", || {
+            viscosity(grid, p.viscosity, p.density, dt, p.viscous)
+        });
+        info.viscosity = Some(v.map_err(StepError::Viscosity)?);
+    } else {
+        times.add("viscosity", 0.0);
+    }
+    // 7: projection (the monolithic tension/coupling solve of §7 takes its place)
+    let proj = timed(
+        times,
+        "projection",
+        || -> Result<ProjectionInfo, NotFinite> {
+            let (pi, mut valid) = project(grid, solids, p.pressure)?;
+            extrapolate(grid, &mut valid, p.margin + 1);
+            constrain_solids(grid, solids);
+            Ok(pi)
+        },
+    );
+    info.pressure = proj.map_err(StepError::Pressure)?;
+    // 8: grid → particles
+    timed(times, "g2p", || grid_to_particles(grid, particles, p.flip));
+    debug_check(particles, "g2p")?;
+    // 1: advection (first step of the next cycle of Algorithm 1)
+    info.advect = timed(times, "advect", || {
+        advect(particles, grid, solids, p.lo, p.hi, dt)
+    });
+    // 2–3: codimension update (§8) and reseeding (§9) edit `particles` here,
+    // through `Particles::retain` / `Particles::push`.
+    let bad = count_non_finite(particles);
+    if bad > 0 {
+        return Err(StepError::NonFinite {
+            stage: "advect",
+            count: bad,
+        });
+    }
+    Ok(info)
+}
+
+/// Largest stable substep (s) for the current particle velocities:
+/// `Δt = cfl Δx / (max|u| + √(Δx |a|))`, capped by `max_dt`.
+pub fn cfl_dt(parts: &Particles, dx: Real, accel: Vec3, cfl: Real, max_dt: Real) -> Real {
+    let vmax = parts.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+    let denom = vmax + (dx * accel.norm()).sqrt();
+    if denom > 0.0 {
+        (cfl * dx / denom).min(max_dt)
+    } else {
+        max_dt
+    }
+}
