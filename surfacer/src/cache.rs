@@ -271,7 +271,7 @@ pub fn write_frame(
     ply.payload.insert("vertex".into(), rows);
     crate::ply::write_atomically(path, |w| {
         ply_rs_bw::writer::Writer::new()
-            .write_ply_unchecked(w, &ply)
+            .write_ply(w, &mut ply)
             .map(|_| ())
     })
 }
