@@ -17,11 +17,14 @@ struct Cli {
 enum Command {
     /// Measure run time (and error, where there is one) of a part of the solver.
     Bench(cli::bench::BenchArgs),
+    /// Turn a particle cache into OpenVDB level sets and PLY meshes (surface.####.vdb, mesh.####.ply, …).
+    Surface(cli::surface::SurfaceArgs),
 }
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Bench(a) => cli::bench::run(a),
+        Command::Surface(a) => cli::surface::run(a),
     }
 }

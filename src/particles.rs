@@ -163,7 +163,13 @@ mod tests {
         let mut p = Particles::new();
         for i in 0..5 {
             let c = Codim::from_number((i % 4) as u8).unwrap();
-            p.push(Vec3::new(i as Real, 0.0, 0.0), Vec3::zeros(), 1.0 + i as Real, 0.1, c);
+            p.push(
+                Vec3::new(i as Real, 0.0, 0.0),
+                Vec3::zeros(),
+                1.0 + i as Real,
+                0.1,
+                c,
+            );
         }
         p.retain(&[true, false, true, false, true]);
         assert_eq!(p.len(), 3);

@@ -1,2 +1,3 @@
 //! One file per subcommand: each defines its clap `…Args` and a `run`.
 pub mod bench;
+pub mod surface;

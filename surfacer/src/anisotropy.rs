@@ -87,18 +87,23 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
         .map(|i| {
             let xi = pos[i];
             let mut wsum = 0.0;
-            let mut xw = Vec3::zeros();
+            let mut m1 = Vec3::zeros();
+            let mut m2 = Mat3::zeros();
             let mut n = 0usize;
+            // one pass: Σw, Σw d, Σw d dᵀ with d = x_j − x_i (local coordinates keep it exact enough)
             grid.for_each_within(pos, &xi, r, |j, d2| {
                 if j != i {
                     n += 1;
                 }
                 let q = d2.sqrt() / r;
                 let w = 1.0 - q * q * q;
+                let d = pos[j] - xi;
                 wsum += w;
-                xw += w * pos[j];
+                m1 += w * d;
+                m2 += w * d * d.transpose();
             });
-            xw /= wsum;
+            let mean = m1 / wsum;
+            let xw = xi + mean;
             let center = (1.0 - p.lambda) * xi + p.lambda * xw;
             let iso = |scale: Real| {
                 let s = 1.0 / (scale * h);
@@ -117,14 +122,7 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
             if n <= p.n_eps {
                 return iso(p.kn);
             }
-            let mut c = Mat3::zeros();
-            grid.for_each_within(pos, &xi, r, |j, d2| {
-                let q = d2.sqrt() / r;
-                let w = 1.0 - q * q * q;
-                let d = pos[j] - xw;
-                c += w * d * d.transpose();
-            });
-            c /= wsum;
+            let c = m2 / wsum - mean * mean.transpose();
             let eig = nalgebra::SymmetricEigen::new(c);
             let s1 = eig.eigenvalues.max();
             if !(s1 > 0.0) || !s1.is_finite() {

@@ -320,6 +320,9 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                     }
                 }
             }
+            // merge the vertices emitted several times inside this block (one per tetrahedron)
+            verts.sort_unstable_by_key(|v| v.0);
+            verts.dedup_by_key(|v| v.0);
             (verts, tris)
         })
         .collect();

@@ -104,87 +104,166 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
     info.flat_gradient = seeds.iter().filter(|s| s.1).count();
 
     let mut grid = WorkGrid::new(h, bg);
-    let mut frontier: Vec<Key> = Vec::with_capacity(seeds.len());
-    let apply = |grid: &mut WorkGrid, e: &Entry| {
+    // `front[li]`: voxels of leaf li set in the previous layer
+    let mut front: Vec<[u64; 8]> = Vec::new();
+    for (e, _) in &seeds {
         let li = grid.ensure(leaf_origin(e.0), &inside);
+        if li >= front.len() {
+            front.resize(li + 1, [0; 8]);
+        }
         let l = &mut grid.leaves[li];
         let n = voxel_index(e.0);
         l.phi[n] = e.1;
         l.cp[n] = e.2;
         l.vel[n] = e.3;
         l.set[n >> 6] |= 1 << (n & 63);
-    };
-    for (e, _) in &seeds {
-        apply(&mut grid, e);
-        frontier.push(e.0);
+        front[li][n >> 6] |= 1 << (n & 63);
     }
     drop(seeds);
 
     let layers = band.ceil() as usize + 1;
     let limit = (band + 1.0) * h;
     for _ in 0..layers {
-        let get = |g: &WorkGrid, k: Key| -> Option<usize> {
-            let li = *g.index.get(&leaf_origin(k))?;
-            let n = voxel_index(k);
-            g.leaves[li].is_set(n).then_some(li * LEAF_SIZE + n)
-        };
-        let mut cand: Vec<Key> = frontier
-            .par_iter()
-            .flat_map_iter(|&k| {
-                let mut v = Vec::new();
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            let c = [k[0] + dx, k[1] + dy, k[2] + dz];
-                            if get(&grid, c).is_none() {
-                                v.push(c);
-                            }
+        // create the neighbour leaves a front voxel on a leaf face can reach (sorted: deterministic)
+        let mut need: Vec<Key> = Vec::new();
+        for (li, fr) in front.iter().enumerate() {
+            if fr.iter().all(|&w| w == 0) {
+                continue;
+            }
+            let o = grid.leaves[li].origin;
+            let mut lo = [false; 3];
+            let mut hi = [false; 3];
+            for n in 0..LEAF_SIZE {
+                if fr[n >> 6] >> (n & 63) & 1 == 1 {
+                    let k = voxel_of([0, 0, 0], n);
+                    for a in 0..3 {
+                        lo[a] |= k[a] == 0;
+                        hi[a] |= k[a] == 7;
+                    }
+                }
+            }
+            for dx in -1i32..=1 {
+                for dy in -1i32..=1 {
+                    for dz in -1i32..=1 {
+                        let d = [dx, dy, dz];
+                        if (0..3).all(|a| d[a] == 0 || (d[a] < 0 && lo[a]) || (d[a] > 0 && hi[a]))
+                            && d != [0, 0, 0]
+                        {
+                            need.push([o[0] + 8 * dx, o[1] + 8 * dy, o[2] + 8 * dz]);
                         }
                     }
                 }
-                v
-            })
-            .collect();
-        cand.par_sort_unstable();
-        cand.dedup();
+            }
+        }
+        need.sort_unstable();
+        need.dedup();
+        for k in need {
+            grid.ensure(k, &inside);
+        }
+        front.resize(grid.leaves.len(), [0; 8]);
+        // leaves that may receive new values: those with or next to front voxels
         let g = &grid;
-        let new: Vec<Entry> = cand
-            .par_iter()
-            .filter_map(|&c| {
-                let x = world(c);
-                let mut best = (Real::INFINITY, 0usize);
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            if let Some(id) = get(g, [c[0] + dx, c[1] + dy, c[2] + dz]) {
-                                let cp = g.leaves[id / LEAF_SIZE].cp[id % LEAF_SIZE];
-                                let cp = Vec3::new(cp[0] as Real, cp[1] as Real, cp[2] as Real);
-                                let dist = (x - cp).norm();
-                                if dist < best.0 {
-                                    best = (dist, id);
+        let fr = &front;
+        let nbrs = |li: usize| -> [Option<usize>; 27] {
+            let o = g.leaves[li].origin;
+            let mut r = [None; 27];
+            for (s, slot) in r.iter_mut().enumerate() {
+                let d = [
+                    (s / 9) as i32 - 1,
+                    (s / 3 % 3) as i32 - 1,
+                    (s % 3) as i32 - 1,
+                ];
+                *slot = g
+                    .index
+                    .get(&[o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]])
+                    .copied();
+            }
+            r
+        };
+        let updates: Vec<(usize, Vec<(usize, f32, [f32; 3], [f32; 3])>)> = (0..g.leaves.len())
+            .into_par_iter()
+            .filter_map(|li| {
+                let nb = nbrs(li);
+                if nb.iter().flatten().all(|&j| fr[j].iter().all(|&w| w == 0)) {
+                    return None;
+                }
+                let leaf = &g.leaves[li];
+                let o = leaf.origin;
+                // (leaf, voxel) of a neighbour voxel given local coordinates in -1..=8
+                let at = |k: [i32; 3]| -> Option<(usize, usize)> {
+                    let s = |x: i32| {
+                        if x < 0 {
+                            0
+                        } else if x > 7 {
+                            2
+                        } else {
+                            1
+                        }
+                    };
+                    let j = nb[(s(k[0]) * 9 + s(k[1]) * 3 + s(k[2])) as usize]?;
+                    Some((j, voxel_index([k[0] & 7, k[1] & 7, k[2] & 7])))
+                };
+                let mut out = Vec::new();
+                for n in 0..LEAF_SIZE {
+                    if leaf.is_set(n) {
+                        continue;
+                    }
+                    let k = voxel_of([0, 0, 0], n);
+                    let mut near_front = false;
+                    let mut best = (Real::INFINITY, 0usize, 0usize);
+                    let x = world([o[0] + k[0], o[1] + k[1], o[2] + k[2]]);
+                    for dx in -1..=1 {
+                        for dy in -1..=1 {
+                            for dz in -1..=1 {
+                                let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                                    continue;
+                                };
+                                if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
+                                    near_front = true;
+                                }
+                                let lj = &g.leaves[j];
+                                if lj.is_set(m) {
+                                    let cp = lj.cp[m];
+                                    let cp = Vec3::new(cp[0] as Real, cp[1] as Real, cp[2] as Real);
+                                    let dist = (x - cp).norm();
+                                    if dist < best.0 {
+                                        best = (dist, j, m);
+                                    }
                                 }
                             }
                         }
                     }
+                    if !near_front || best.0 > limit {
+                        continue;
+                    }
+                    let s = if inside([o[0] + k[0], o[1] + k[1], o[2] + k[2]]) {
+                        -1.0
+                    } else {
+                        1.0
+                    };
+                    let src = &g.leaves[best.1];
+                    out.push((n, (s * best.0) as f32, src.cp[best.2], src.vel[best.2]));
                 }
-                if best.0 > limit {
-                    return None;
-                }
-                let l = &g.leaves[best.1 / LEAF_SIZE];
-                let n = best.1 % LEAF_SIZE;
-                let s = if inside(c) { -1.0 } else { 1.0 };
-                Some((c, (s * best.0) as f32, l.cp[n], l.vel[n]))
+                (!out.is_empty()).then_some((li, out))
             })
             .collect();
-        if new.is_empty() {
+        if updates.is_empty() {
             break;
         }
-        frontier.clear();
-        for e in &new {
-            apply(&mut grid, e);
-            frontier.push(e.0);
+        for f in front.iter_mut() {
+            *f = [0; 8];
         }
-        info.propagated += new.len();
+        for (li, list) in updates {
+            let l = &mut grid.leaves[li];
+            for (n, phi, cp, vel) in list {
+                l.phi[n] = phi;
+                l.cp[n] = cp;
+                l.vel[n] = vel;
+                l.set[n >> 6] |= 1 << (n & 63);
+                front[li][n >> 6] |= 1 << (n & 63);
+                info.propagated += 1;
+            }
+        }
     }
 
     let extra_inside: Vec<Key> = d
@@ -229,32 +308,41 @@ pub fn conserve_volume(
             0.5 / eps * (1.0 + (std::f64::consts::PI * x / eps).cos())
         }
     };
-    let (mut vol, area) = grid
-        .leaves
-        .par_iter()
-        .map(|l| {
-            let mut v = 0.0;
-            let mut a = 0.0;
-            for n in 0..LEAF_SIZE {
-                let phi = l.phi[n] as Real;
-                v += heav(-phi);
-                a += delta(phi);
-            }
-            (v, a)
-        })
-        .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
-    vol += d
+    let h3 = h * h * h;
+    let interior = d
         .blocks
         .par_iter()
         .filter(|b| !grid.index.contains_key(&b.origin))
         .map(|b| b.f.iter().filter(|&&f| f >= iso).count() as Real)
         .sum::<Real>();
-    let h3 = h * h * h;
-    let (vol, area) = (vol * h3, area * h3);
-    if !(area > 0.0) {
-        return 0.0;
+    // V(s), A(s) of the shifted field φ + s
+    let eval = |s: Real| {
+        let (v, a) = grid
+            .leaves
+            .par_iter()
+            .map(|l| {
+                let mut v = 0.0;
+                let mut a = 0.0;
+                for n in 0..LEAF_SIZE {
+                    let phi = l.phi[n] as Real + if l.is_set(n) { s } else { 0.0 };
+                    v += heav(-phi);
+                    a += delta(phi);
+                }
+                (v, a)
+            })
+            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+        ((v + interior) * h3, a * h3)
+    };
+    // Newton iterations on V(s) = V_p (V decreases with s at rate A)
+    let lim = 0.5 * band * h;
+    let mut shift = 0.0;
+    for _ in 0..4 {
+        let (vol, area) = eval(shift);
+        if !(area > 0.0) {
+            break;
+        }
+        shift = (shift + (vol - target) / area).clamp(-lim, lim);
     }
-    let shift = ((vol - target) / area).clamp(-0.5 * band * h, 0.5 * band * h);
     let bg = grid.bg;
     grid.leaves.par_iter_mut().for_each(|l| {
         for n in 0..LEAF_SIZE {

@@ -2,6 +2,7 @@
 use clap::{Args, Subcommand};
 
 mod neighbors;
+mod surface;
 
 /// Arguments of `codimfx bench`.
 #[derive(Args, Debug)]
@@ -14,11 +15,14 @@ pub struct BenchArgs {
 enum BenchTarget {
     /// Fixed-radius neighbour search: uniform cell grid against kiddo's k-d tree.
     Neighbors(neighbors::NeighborsArgs),
+    /// Surfacer on a ~860k-particle blob: time, peak memory, triangles (and splashsurf if on PATH).
+    Surface(surface::SurfaceBenchArgs),
 }
 
 /// Runs the chosen benchmark.
 pub fn run(a: BenchArgs) -> anyhow::Result<()> {
     match a.target {
         BenchTarget::Neighbors(x) => neighbors::run(x),
+        BenchTarget::Surface(x) => surface::run(x),
     }
 }

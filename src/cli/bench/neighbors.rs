@@ -44,7 +44,11 @@ fn block(n: usize) -> Vec<Vec3> {
                     break 'outer;
                 }
                 let mut jit = || 0.3 * (rand01(&mut s) - 0.5);
-                v.push(Vec3::new(i as Real + jit(), j as Real + jit(), k as Real + jit()));
+                v.push(Vec3::new(
+                    i as Real + jit(),
+                    j as Real + jit(),
+                    k as Real + jit(),
+                ));
             }
         }
     }
@@ -95,7 +99,10 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
                 };
                 let (tg, g) = best_of(a.reps, || neighbor_lists(&pts, r));
                 let (tk, kd) = best_of(a.reps, || neighbor_lists_kiddo(&pts, r));
-                ensure!(g == kd, "cell grid and kiddo disagree on {name} n={n} k={k}");
+                ensure!(
+                    g == kd,
+                    "cell grid and kiddo disagree on {name} n={n} k={k}"
+                );
                 println!(
                     "| {name} | {n} | {:.1} | {:.1} | {:.1} | {:.0} | {:.0} |",
                     g.mean_count(),
