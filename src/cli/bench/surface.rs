@@ -240,7 +240,7 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
         }
         let peak = peak_rss("self").unwrap_or(0);
         let st = &g.stats;
-        let pvol = f.len() as f64 * a.spacing.powi(3);
+        let pvol = f.codim.iter().filter(|&&c| c == 0).count() as f64 * a.spacing.powi(3);
         println!(
             "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {:+.2} % |",
             if aniso { "anisotropic" } else { "isotropic" },
