@@ -82,9 +82,12 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
     let h = kernel_radius(p, dx);
     let ks = p.ks_rel / (0.15 * r * r);
     let grid = CellGrid::build(pos, r);
-    let per: Vec<(Vec3, Mat3, Real, Vec3, bool)> = (0..pos.len())
-        .into_par_iter()
-        .map(|i| {
+    // visit particles in cell order (neighbours stay in cache), then scatter back
+    let per_sorted: Vec<(Vec3, Mat3, Real, Vec3, bool)> = grid
+        .order()
+        .par_iter()
+        .map(|&i| {
+            let i = i as usize;
             let xi = pos[i];
             let mut wsum = 0.0;
             let mut m1 = Vec3::zeros();
@@ -140,6 +143,11 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
             (center, g, SIGMA_P * det * vol[i], ext, false)
         })
         .collect();
+    let mut per = vec![(Vec3::zeros(), Mat3::zeros(), 0.0, Vec3::zeros(), false); pos.len()];
+    for (k, &i) in grid.order().iter().enumerate() {
+        per[i as usize] = per_sorted[k];
+    }
+    drop(per_sorted);
     let mut k = Kernels::default();
     for (c, g, a, e, iso) in per {
         k.center.push(c);

@@ -52,6 +52,11 @@ pub struct CellGrid {
 }
 
 impl CellGrid {
+    /// Points in cell order (each cell's points by increasing index).
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
     /// Bins `points` into cells of size `h`.
     pub fn build(points: &[Vec3], h: Real) -> CellGrid {
         let inv_h = 1.0 / h;
@@ -78,8 +83,8 @@ impl CellGrid {
         }
     }
 
-    /// Calls `f(j, d²)` for every point `j` with `|p_j − q| ≤ r` (r ≤ cell size), cells visited
-    /// in a fixed order so results are deterministic.
+    /// Calls `f(j, d²)` for every point `j` with `|p_j − q| ≤ r`, cells visited in a fixed order
+    /// so results are deterministic.
     pub fn for_each_within(
         &self,
         points: &[Vec3],
@@ -89,9 +94,10 @@ impl CellGrid {
     ) {
         let c = cell_of(q, self.inv_h);
         let r2 = r * r;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
+        let m = (r * self.inv_h).ceil() as i32;
+        for dx in -m..=m {
+            for dy in -m..=m {
+                for dz in -m..=m {
                     if let Some(&(s, e)) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
                         for &j in &self.order[s as usize..e as usize] {
                             let d2 = (points[j as usize] - q).norm_squared();
@@ -128,15 +134,18 @@ mod tests {
                 Vec3::new(t.sin() * 2.0, (1.3 * t).cos() * 2.0, (0.7 * t).sin())
             })
             .collect();
-        let g = CellGrid::build(&pts, 0.5);
-        for q in &pts[..20] {
-            let mut found = Vec::new();
-            g.for_each_within(&pts, q, 0.5, |j, _| found.push(j));
-            found.sort();
-            let brute: Vec<usize> = (0..pts.len())
-                .filter(|&j| (pts[j] - q).norm() <= 0.5)
-                .collect();
-            assert_eq!(found, brute);
+        // cells equal to and smaller than the radius (regression: smaller cells once missed points)
+        for cell in [0.5, 0.25, 0.17] {
+            let g = CellGrid::build(&pts, cell);
+            for q in &pts[..40] {
+                let mut found = Vec::new();
+                g.for_each_within(&pts, q, 0.5, |j, _| found.push(j));
+                found.sort();
+                let brute: Vec<usize> = (0..pts.len())
+                    .filter(|&j| (pts[j] - q).norm() <= 0.5)
+                    .collect();
+                assert_eq!(found, brute, "cell {cell}");
+            }
         }
     }
 }
