@@ -98,7 +98,72 @@ pub fn run(a: SurfaceArgs) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::parse_frames;
+    use super::*;
+
+    #[test]
+    fn surface_command_writes_the_requested_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let dx = 0.05;
+        let ps = dx * (3.0 / (4.0 * std::f64::consts::PI)).cbrt();
+        for n in 1..=3u32 {
+            let mut f = surfacer::ParticleFrame::default();
+            for i in -4..=4 {
+                for j in -4..=4 {
+                    for k in -4..=4 {
+                        let p = surfacer::Vec3::new(i as f64, j as f64, k as f64) * dx;
+                        if p.norm() <= 0.2 {
+                            let id = f.len() as u32;
+                            f.push(
+                                p,
+                                surfacer::Vec3::zeros(),
+                                id,
+                                0,
+                                ps,
+                                0.125,
+                                surfacer::Vec3::zeros(),
+                            );
+                        }
+                    }
+                }
+            }
+            surfacer::cache::write_frame(&surfacer::cache::frame_path(dir.path(), n), &f, n, 0.0)
+                .unwrap();
+        }
+        let out = dir.path().join("geo");
+        run(SurfaceArgs {
+            cache_dir: dir.path().into(),
+            out: Some(out.clone()),
+            frames: Some("2-3".into()),
+            voxel_size: Some(0.02),
+            band: 3.0,
+            isotropic: false,
+            lambda: 0.9,
+            parallel_frames: 2,
+            density: 1000.0,
+        })
+        .unwrap();
+        for n in [2, 3] {
+            for name in ["surface", "mesh", "sheets", "filaments"] {
+                let ext = if name == "surface" { "vdb" } else { "ply" };
+                assert!(out.join(format!("{name}.{n:04}.{ext}")).exists());
+            }
+        }
+        assert!(!out.join("surface.0001.vdb").exists());
+        // a bad range names itself
+        let e = run(SurfaceArgs {
+            cache_dir: dir.path().into(),
+            out: Some(out),
+            frames: Some("8-9".into()),
+            voxel_size: None,
+            band: 3.0,
+            isotropic: false,
+            lambda: 0.9,
+            parallel_frames: 1,
+            density: 1000.0,
+        })
+        .unwrap_err();
+        assert!(format!("{e:#}").contains("8-9"), "{e:#}");
+    }
 
     #[test]
     fn frame_ranges_parse_and_bad_ones_are_named() {

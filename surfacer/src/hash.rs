@@ -49,6 +49,8 @@ pub struct CellGrid {
     inv_h: Real,
     cells: FxMap<Key, (u32, u32)>,
     order: Vec<u32>,
+    /// positions in cell order (contiguous per cell, for cache locality)
+    sorted: Vec<Vec3>,
 }
 
 impl CellGrid {
@@ -76,10 +78,12 @@ impl CellGrid {
             cells.insert(keyed[s].0, (s as u32, e as u32));
             s = e;
         }
+        let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
         CellGrid {
             inv_h,
             cells,
-            order: keyed.into_iter().map(|(_, i)| i).collect(),
+            sorted: order.iter().map(|&i| points[i as usize]).collect(),
+            order,
         }
     }
 
@@ -87,7 +91,7 @@ impl CellGrid {
     /// so results are deterministic.
     pub fn for_each_within(
         &self,
-        points: &[Vec3],
+        _points: &[Vec3],
         q: &Vec3,
         r: Real,
         mut f: impl FnMut(usize, Real),
@@ -99,8 +103,9 @@ impl CellGrid {
             for dy in -m..=m {
                 for dz in -m..=m {
                     if let Some(&(s, e)) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
-                        for &j in &self.order[s as usize..e as usize] {
-                            let d2 = (points[j as usize] - q).norm_squared();
+                        let (s, e) = (s as usize, e as usize);
+                        for (p, &j) in self.sorted[s..e].iter().zip(&self.order[s..e]) {
+                            let d2 = (p - q).norm_squared();
                             if d2 <= r2 {
                                 f(j as usize, d2);
                             }

@@ -163,7 +163,12 @@ pub fn surface_particles(
         st.particles[(*c).min(3) as usize] += 1;
     }
     let Some(dx) = volume_spacing(frame) else {
-        return Ok(FrameGeometry::default());
+        // no particles: an empty (all outside) level set with a valid transform
+        let h = o.voxel_size.unwrap_or(1.0);
+        return Ok(FrameGeometry {
+            levelset: LevelSet::new(h, (o.band_voxels * h) as f32, Vec::new(), Vec::new()),
+            ..Default::default()
+        });
     };
     let h = o.voxel_size.unwrap_or(o.voxel_rel * dx);
     st.voxel = h;
@@ -277,7 +282,8 @@ pub fn surface_cache(
         });
     }
     std::fs::create_dir_all(out_dir).map_err(|e| SurfaceError::io(out_dir, e))?;
-    for chunk in frames.chunks(o.parallel_frames.max(1)) {
+    let parallel = frames_in_parallel(cache_dir, &frames, o.parallel_frames);
+    for chunk in frames.chunks(parallel) {
         chunk
             .par_iter()
             .map(|&f| {
@@ -290,4 +296,36 @@ pub fn surface_cache(
             .collect::<Result<Vec<()>, SurfaceError>>()?;
     }
     Ok(frames)
+}
+
+/// Bytes of peak memory per particle measured by `codimfx bench surface` (≈1.5 kB at voxel = Δ/2),
+/// with a safety factor.
+const BYTES_PER_PARTICLE: u64 = 2048;
+/// Bytes per particle in a cache file (docs/cache-format.md: 11 doubles, a uint and a uchar).
+const CACHE_BYTES_PER_PARTICLE: u64 = 11 * 8 + 4 + 1;
+
+/// How many frames fit in memory at once: at most `wanted`, at most what `MemAvailable` allows for
+/// the largest frame (estimated from its file size), at least 1.
+pub fn frames_in_parallel(dir: &Path, frames: &[u32], wanted: usize) -> usize {
+    let largest = frames
+        .iter()
+        .filter_map(|&f| std::fs::metadata(frame_path(dir, f)).ok())
+        .map(|m| m.len())
+        .max()
+        .unwrap_or(0);
+    let need = (largest / CACHE_BYTES_PER_PARTICLE).max(1) * BYTES_PER_PARTICLE;
+    let avail = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("MemAvailable:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|k| k.parse::<u64>().ok())
+        })
+        .map(|k| k * 1024);
+    let fit = match avail {
+        Some(a) => (a / need).max(1) as usize,
+        None => wanted,
+    };
+    wanted.max(1).min(fit)
 }

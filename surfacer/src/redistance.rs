@@ -209,7 +209,23 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                         continue;
                     }
                     let k = voxel_of([0, 0, 0], n);
+                    // cheap test first: is any 26-neighbour in the front?
                     let mut near_front = false;
+                    'scan: for dx in -1..=1 {
+                        for dy in -1..=1 {
+                            for dz in -1..=1 {
+                                if let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) {
+                                    if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
+                                        near_front = true;
+                                        break 'scan;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    if !near_front {
+                        continue;
+                    }
                     let mut best = (Real::INFINITY, 0usize, 0usize);
                     let x = world([o[0] + k[0], o[1] + k[1], o[2] + k[2]]);
                     for dx in -1..=1 {
@@ -218,14 +234,11 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                                 let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
                                     continue;
                                 };
-                                if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
-                                    near_front = true;
-                                }
                                 let lj = &g.leaves[j];
                                 if lj.is_set(m) {
                                     let cp = lj.cp[m];
                                     let cp = Vec3::new(cp[0] as Real, cp[1] as Real, cp[2] as Real);
-                                    let dist = (x - cp).norm();
+                                    let dist = (x - cp).norm_squared();
                                     if dist < best.0 {
                                         best = (dist, j, m);
                                     }
@@ -233,6 +246,7 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                             }
                         }
                     }
+                    best.0 = best.0.sqrt();
                     if !near_front || best.0 > limit {
                         continue;
                     }
