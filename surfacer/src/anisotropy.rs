@@ -56,9 +56,12 @@ impl Default for AnisoParams {
 /// Kernel normalisation σ_P = 315/(64π) for P(s) = (1 − s²)³ on the unit ball.
 pub const SIGMA_P: Real = 315.0 / (64.0 * std::f64::consts::PI);
 
-/// Per-particle kernels, structure of arrays.
+/// Per-particle kernels, structure of arrays, in cell order: kernel k belongs to particle
+/// `index[k]`.
 #[derive(Debug, Clone, Default)]
 pub struct Kernels {
+    /// particle index of each kernel
+    pub index: Vec<u32>,
     /// kernel centres x̄ (m)
     pub center: Vec<Vec3>,
     /// G matrices (1/m)
@@ -143,13 +146,12 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
             (center, g, SIGMA_P * det * vol[i], ext, false)
         })
         .collect();
-    let mut per = vec![(Vec3::zeros(), Mat3::zeros(), 0.0, Vec3::zeros(), false); pos.len()];
-    for (k, &i) in grid.order().iter().enumerate() {
-        per[i as usize] = per_sorted[k];
-    }
-    drop(per_sorted);
-    let mut k = Kernels::default();
-    for (c, g, a, e, iso) in per {
+    // kernels stay in cell order (better locality for the density pass); `index` maps back
+    let mut k = Kernels {
+        index: grid.order().to_vec(),
+        ..Default::default()
+    };
+    for (c, g, a, e, iso) in per_sorted {
         k.center.push(c);
         k.g.push(g);
         k.amp.push(a);
@@ -181,9 +183,11 @@ mod tests {
         let pos = lattice(11, dx);
         let vol = vec![dx * dx * dx; pos.len()];
         let k = build_kernels(&pos, &vol, dx, &AnisoParams::default());
-        let mid = 5 * 121 + 5 * 11 + 5;
+        let at = |p: usize| k.index.iter().position(|&i| i as usize == p).unwrap();
+        let mid_p = 5 * 121 + 5 * 11 + 5;
+        let mid = at(mid_p);
         // centre unchanged by symmetric smoothing
-        assert!((k.center[mid] - pos[mid]).norm() < 1e-12);
+        assert!((k.center[mid] - pos[mid_p]).norm() < 1e-12);
         // Σ̃ ≈ I in the bulk: G ≈ I/h within the lattice's deviation from a continuum (< 15 %)
         let h = kernel_radius(&AnisoParams::default(), dx);
         let e = nalgebra::SymmetricEigen::new(k.g[mid]).eigenvalues * h;
@@ -191,7 +195,7 @@ mod tests {
             assert!((v - 1.0).abs() < 0.15, "eigenvalue of hG = {v}");
         }
         // surface particle (face centre) is flattened along the face normal, at most k_r
-        let face = 5 * 121 + 5 * 11;
+        let face = at(5 * 121 + 5 * 11);
         let e = nalgebra::SymmetricEigen::new(k.g[face]).eigenvalues;
         let ratio = e.max() / e.min();
         assert!(ratio > 1.3 && ratio <= 4.0 + 1e-9, "axis ratio {ratio}");

@@ -56,7 +56,8 @@ impl DensityField {
     }
 }
 
-/// Sums the kernels (with particle velocities `vel`) on the grid of voxel size `h`.
+/// Sums the kernels (with particle velocities `vel`, indexed by particle) on the grid of voxel
+/// size `h`.
 pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
     let inv = 1.0 / h;
     // (block, particle) pairs
@@ -107,7 +108,7 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
                 let ex = k.extent[i];
                 let g = k.g[i];
                 let amp = k.amp[i];
-                let v = vel[i];
+                let v = vel[k.index[i] as usize];
                 let lo = ((c - ex) * inv).map(|x| x.ceil() as i32);
                 let hi = ((c + ex) * inv).map(|x| x.floor() as i32);
                 for x in lo.x.max(origin[0])..=hi.x.min(origin[0] + 7) {

@@ -209,7 +209,7 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     blocks.par_sort_unstable();
     blocks.dedup();
     let h = ls.voxel;
-    let parts: Vec<(Vec<(u128, Vec3, Vec3)>, Vec<[u128; 3]>)> = blocks
+    let parts: Vec<(Vec<(u128, Vec3, Vec3)>, Vec<[u32; 3]>)> = blocks
         .par_iter()
         .map(|&o| {
             let mut nb = Nbhd {
@@ -225,12 +225,12 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                 nb.leaves[s] = ls.leaf(lo);
                 nb.tile[s] = ls.value(lo);
             }
-            let mut verts = Vec::new();
-            let mut tris = Vec::new();
+            let mut verts: Vec<(u128, Vec3, Vec3)> = Vec::new();
+            let mut tris: Vec<[u128; 3]> = Vec::new();
             if nb.leaves.iter().all(|l| l.is_none())
                 && nb.tile.iter().all(|&t| (t < 0.0) == (nb.tile[0] < 0.0))
             {
-                return (verts, tris);
+                return (verts, Vec::new());
             }
             for x in 0..LEAF_DIM {
                 for y in 0..LEAF_DIM {
@@ -323,32 +323,56 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
             // merge the vertices emitted several times inside this block (one per tetrahedron)
             verts.sort_unstable_by_key(|v| v.0);
             verts.dedup_by_key(|v| v.0);
+            verts.shrink_to_fit();
+            let local = |k: u128| -> u32 {
+                verts
+                    .binary_search_by_key(&k, |v| v.0)
+                    .expect("vertex emitted with its triangle") as u32
+            };
+            let tris: Vec<[u32; 3]> = tris.iter().map(|t| t.map(local)).collect();
             (verts, tris)
         })
         .collect();
-    // merge vertices by edge key
-    let mut all: Vec<(u128, Vec3, Vec3)> = Vec::new();
-    let mut tri_keys: Vec<[u128; 3]> = Vec::new();
+    // merge vertices shared between blocks by edge key; blocks are consumed as they are copied
+    let nv: usize = parts.iter().map(|p| p.0.len()).sum();
+    let nt: usize = parts.iter().map(|p| p.1.len()).sum();
+    let mut flat_pos = Vec::with_capacity(nv);
+    let mut flat_vel = Vec::with_capacity(nv);
+    let mut keys: Vec<(u128, u32)> = Vec::with_capacity(nv);
+    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(nt);
     for (v, t) in parts {
-        all.extend(v);
-        tri_keys.extend(t);
+        let off = flat_pos.len() as u32;
+        for (k, p, u) in v {
+            keys.push((k, flat_pos.len() as u32));
+            flat_pos.push(p);
+            flat_vel.push(u);
+        }
+        tris.extend(t.iter().map(|t| t.map(|i| i + off)));
     }
-    all.par_sort_unstable_by_key(|v| v.0);
-    all.dedup_by_key(|v| v.0);
-    let keys: Vec<u128> = all.iter().map(|v| v.0).collect();
+    keys.par_sort_unstable();
+    let mut remap = vec![0u32; nv];
+    let mut pos = Vec::new();
+    let mut vel = Vec::new();
+    let mut s = 0;
+    while s < keys.len() {
+        let id = pos.len() as u32;
+        pos.push(flat_pos[keys[s].1 as usize]);
+        vel.push(flat_vel[keys[s].1 as usize]);
+        let mut e = s;
+        while e < keys.len() && keys[e].0 == keys[s].0 {
+            remap[keys[e].1 as usize] = id;
+            e += 1;
+        }
+        s = e;
+    }
+    drop((keys, flat_pos, flat_vel));
+    tris.par_iter_mut()
+        .for_each(|t| *t = t.map(|i| remap[i as usize]));
     let mut mesh = TriMesh {
-        pos: all.iter().map(|v| v.1).collect(),
-        vel: all.iter().map(|v| v.2).collect(),
+        pos,
+        vel,
         normal: Vec::new(),
-        tris: tri_keys
-            .par_iter()
-            .map(|t| {
-                t.map(|k| {
-                    keys.binary_search(&k)
-                        .expect("vertex emitted with its triangle") as u32
-                })
-            })
-            .collect(),
+        tris,
     };
     mesh.compute_normals();
     mesh
