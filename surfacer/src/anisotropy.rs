@@ -131,7 +131,7 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
             let c = m2 / wsum - mean * mean.transpose();
             let eig = nalgebra::SymmetricEigen::new(c);
             let s1 = eig.eigenvalues.max();
-            if !(s1 > 0.0) || !s1.is_finite() {
+            if s1.is_nan() || s1 <= 0.0 || !s1.is_finite() {
                 return iso(p.kn);
             }
             let floor = s1 / p.kr;

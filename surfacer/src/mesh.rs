@@ -189,6 +189,9 @@ fn edge_key(g: [i32; 3], dir: u8) -> u128 {
     p(g[0]) << 67 | p(g[1]) << 35 | p(g[2]) << 3 | dir as u128
 }
 
+/// One block's vertices (edge key, position, velocity) and triangles (local indices).
+type BlockMesh = (Vec<(u128, Vec3, Vec3)>, Vec<[u32; 3]>);
+
 /// Extracts the zero crossing of `ls` as a triangle mesh.
 pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     let mut blocks: Vec<[i32; 3]> = ls
@@ -209,7 +212,7 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     blocks.par_sort_unstable();
     blocks.dedup();
     let h = ls.voxel;
-    let parts: Vec<(Vec<(u128, Vec3, Vec3)>, Vec<[u32; 3]>)> = blocks
+    let parts: Vec<BlockMesh> = blocks
         .par_iter()
         .map(|&o| {
             let mut nb = Nbhd {

@@ -80,7 +80,7 @@ impl SurfaceOptions {
         if !(self.aniso.lambda >= 0.0 && self.aniso.lambda <= 1.0) {
             return bad("lambda", self.aniso.lambda, "must be in [0, 1]");
         }
-        if !(self.aniso.kr >= 1.0) {
+        if self.aniso.kr.is_nan() || self.aniso.kr < 1.0 {
             return bad("kr", self.aniso.kr, "must be ≥ 1");
         }
         if !(self.aniso.kn > 0.0 && self.aniso.radius_rel > 0.0 && self.aniso.ks_rel > 0.0) {

@@ -30,6 +30,8 @@ pub struct RedistanceInfo {
 }
 
 type Entry = (Key, f32, [f32; 3], [f32; 3]);
+/// A propagated voxel: (index in leaf, φ, closest point, velocity).
+type Update = (usize, f32, [f32; 3], [f32; 3]);
 
 /// Builds the band of half width `band`·Δx around f = `iso`. Returns the grid, the origins of
 /// density blocks entirely inside that are not in the band, and counts.
@@ -81,7 +83,7 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                 }
                 let phi = (1.0 / inv2.sqrt()) * if ins { -1.0 } else { 1.0 };
                 let gn = grad.norm();
-                let flat = !(gn > 0.0);
+                let flat = gn.is_nan() || gn <= 0.0;
                 let cp = if flat {
                     world(ijk)
                 } else {
@@ -180,7 +182,7 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
             }
             r
         };
-        let updates: Vec<(usize, Vec<(usize, f32, [f32; 3], [f32; 3])>)> = (0..g.leaves.len())
+        let updates: Vec<(usize, Vec<Update>)> = (0..g.leaves.len())
             .into_par_iter()
             .filter_map(|li| {
                 let nb = nbrs(li);
@@ -352,7 +354,7 @@ pub fn conserve_volume(
     let mut shift = 0.0;
     for _ in 0..4 {
         let (vol, area) = eval(shift);
-        if !(area > 0.0) {
+        if area.is_nan() || area <= 0.0 {
             break;
         }
         shift = (shift + (vol - target) / area).clamp(-lim, lim);

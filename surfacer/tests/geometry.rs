@@ -8,7 +8,7 @@ use surfacer::{surface_particles, ParticleFrame, Real, SurfaceOptions, TriMesh, 
 
 fn assert_closed_manifold(m: &TriMesh, what: &str) {
     let e = m.edge_stats();
-    assert!(m.tris.len() > 0, "{what}: empty mesh");
+    assert!(!m.tris.is_empty(), "{what}: empty mesh");
     assert_eq!(
         (e.boundary, e.non_manifold, e.misoriented),
         (0, 0, 0),

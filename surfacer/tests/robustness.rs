@@ -60,7 +60,7 @@ fn same_input_same_bytes_for_any_thread_count() {
 fn mixed_frame_has_all_geometry_and_closed_meshes() {
     let g = surface_particles(&mixed(), &SurfaceOptions::default()).unwrap();
     assert_eq!(g.stats.particles[3], 1);
-    assert!(g.sheets.tris.len() > 0 && g.filaments.tris.len() > 0);
+    assert!(!g.sheets.tris.is_empty() && !g.filaments.tris.is_empty());
     for (m, w) in [
         (&g.mesh, "level set"),
         (&g.sheets, "disks"),
@@ -133,5 +133,5 @@ fn bad_inputs_are_errors_naming_place_and_reason() {
     // empty frame: empty outputs, no panic
     let g = surface_particles(&ParticleFrame::default(), &SurfaceOptions::default()).unwrap();
     assert!(g.mesh.tris.is_empty());
-    assert_eq!(surfacer::vdb::encode(&g.levelset).len() > 0, true);
+    assert!(!surfacer::vdb::encode(&g.levelset).is_empty());
 }
