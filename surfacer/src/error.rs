@@ -62,6 +62,16 @@ pub enum SurfaceError {
         /// why
         reason: &'static str,
     },
+    /// Non-finite values were produced (never written to disk).
+    #[error("frame {frame}: {count} non-finite values in {what}; nothing written")]
+    NonFinite {
+        /// frame number
+        frame: u32,
+        /// which output
+        what: &'static str,
+        /// how many
+        count: usize,
+    },
     /// The grid would be larger than the index space or the voxel budget.
     #[error("grid too large: {voxels:.3e} voxels in the bounding box at voxel size {voxel_size} m exceeds the index range (|index| < 2^30); use a larger --voxel-size")]
     GridTooLarge {

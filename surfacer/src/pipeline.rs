@@ -247,8 +247,49 @@ pub fn output_path(dir: &Path, name: &str, frame: u32, ext: &str) -> PathBuf {
     dir.join(format!("{name}.{frame:04}.{ext}"))
 }
 
-/// Writes the four outputs of a frame, each atomically.
+/// Counts non-finite values in the level set and meshes; an error names the output.
+pub fn check_finite(frame: u32, g: &FrameGeometry) -> Result<(), SurfaceError> {
+    let bad_ls: usize = g
+        .levelset
+        .leaves
+        .par_iter()
+        .map(|l| {
+            l.phi.iter().filter(|v| !v.is_finite()).count()
+                + l.vel
+                    .iter()
+                    .filter(|v| v.iter().any(|c| !c.is_finite()))
+                    .count()
+        })
+        .sum();
+    if bad_ls > 0 {
+        return Err(SurfaceError::NonFinite {
+            frame,
+            what: "the level set",
+            count: bad_ls,
+        });
+    }
+    for (m, what) in [
+        (&g.mesh, "mesh"),
+        (&g.sheets, "sheets"),
+        (&g.filaments, "filaments"),
+    ] {
+        let count = m
+            .pos
+            .iter()
+            .chain(&m.vel)
+            .chain(&m.normal)
+            .filter(|v| v.iter().any(|c| !c.is_finite()))
+            .count();
+        if count > 0 {
+            return Err(SurfaceError::NonFinite { frame, what, count });
+        }
+    }
+    Ok(())
+}
+
+/// Writes the four outputs of a frame, each atomically, after checking every value is finite.
 pub fn write_outputs(dir: &Path, frame: u32, g: &FrameGeometry) -> Result<(), SurfaceError> {
+    check_finite(frame, g)?;
     crate::vdb::write_vdb(&output_path(dir, "surface", frame, "vdb"), &g.levelset)?;
     let c = format!("codimfx surface frame {frame}");
     crate::ply::write_mesh(&output_path(dir, "mesh", frame, "ply"), &g.mesh, &c)?;

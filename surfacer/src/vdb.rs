@@ -140,7 +140,7 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
     };
     let mut meta: Vec<(&str, &str)> = vec![("class", class), ("name", name)];
     if kind == Kind::Velocity {
-        meta.push(("vector_type", "contravariant_relative"));
+        meta.push(("vector_type", "contravariant relative"));
     }
     o.u32(meta.len() as u32);
     for (k, v) in meta {

@@ -119,6 +119,7 @@ fn sequence_outputs_open_in_openvdb_and_match_the_sphere() {
     assert!(o.status.success(), "vdb_print failed: {text}");
     assert!(text.contains("surface") && text.contains("float"), "{text}");
     assert!(text.contains("level set"), "{text}");
+    assert!(text.contains("contravariant relative"), "{text}");
     assert!(
         text.lines()
             .any(|l| l.starts_with("Name: v") || l.contains(" v "))
