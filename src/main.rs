@@ -23,6 +23,8 @@ enum Command {
     Sim(cli::sim::SimArgs),
     /// Render PNG previews and a contact sheet of a particle cache.
     Preview(cli::preview::PreviewArgs),
+    /// Turn a particle cache into OpenVDB level sets and PLY meshes (surface.####.vdb, mesh.####.ply, …).
+    Surface(cli::surface::SurfaceArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -32,5 +34,6 @@ fn main() -> anyhow::Result<()> {
         Command::Validate(a) => cli::validate::run(a),
         Command::Sim(a) => cli::sim::run(a),
         Command::Preview(a) => cli::preview::run(a),
+        Command::Surface(a) => cli::surface::run(a),
     }
 }

@@ -3,3 +3,4 @@ pub mod bench;
 pub mod validate;
 pub mod preview;
 pub mod sim;
+pub mod surface;

@@ -4,6 +4,7 @@ use clap::{Args, Subcommand};
 mod neighbors;
 mod operators;
 mod volume;
+mod surface;
 
 /// Arguments of `codimfx bench`.
 #[derive(Args, Debug)]
@@ -20,6 +21,8 @@ enum BenchTarget {
     Operators(operators::OperatorsArgs),
     /// PIC/FLIP volume solver: ms per substep per stage on a 250k-particle dam break.
     Volume(volume::VolumeArgs),
+    /// Surfacer on a ~860k-particle blob: time, peak memory, triangles (and splashsurf if on PATH).
+    Surface(surface::SurfaceBenchArgs),
 }
 
 /// Runs the chosen benchmark.
@@ -28,5 +31,6 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
         BenchTarget::Neighbors(x) => neighbors::run(x),
         BenchTarget::Operators(x) => operators::run(x),
         BenchTarget::Volume(x) => volume::run(x),
+        BenchTarget::Surface(x) => surface::run(x),
     }
 }

@@ -1,0 +1,299 @@
+//! `codimfx bench surface`: the surfacer on a ~860k-particle volume blob (a sphere above a slab,
+//! jittered lattice of spacing 0.0125 m) at voxel size = particle radius (spacing/2): wall time
+//! per stage, peak memory, triangles. When a `splashsurf` binary is on PATH the same particles
+//! run through it (isotropic kernels, same radius and cube size) and the ratios are printed.
+use anyhow::{Context, Result};
+use clap::Args;
+use std::io::Write;
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+use surfacer::{ParticleFrame, SurfaceOptions, Vec3};
+
+/// Arguments of `codimfx bench surface`.
+#[derive(Args, Debug)]
+pub struct SurfaceBenchArgs {
+    /// Particle spacing (m).
+    #[arg(long, default_value_t = 0.0125)]
+    spacing: f64,
+    /// Sphere radius (m).
+    #[arg(long, default_value_t = 0.55)]
+    sphere_radius: f64,
+    /// Slab side (m), square in x and y.
+    #[arg(long, default_value_t = 2.0)]
+    slab_side: f64,
+    /// Slab thickness (m).
+    #[arg(long, default_value_t = 0.25)]
+    slab_thickness: f64,
+    /// Also run with isotropic kernels.
+    #[arg(long)]
+    isotropic_too: bool,
+    /// Add a sheet (disk of sheet particles), a helix filament and a few point particles around
+    /// the blob, to exercise every codimension (used by .ci/dcc.sh).
+    #[arg(long)]
+    extras: bool,
+    /// Write the outputs (VDB and PLY) to this folder and time that as well.
+    #[arg(long)]
+    write: Option<std::path::PathBuf>,
+}
+
+fn rand01(s: &mut u64) -> f64 {
+    *s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *s;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The blob: a slab z ∈ [0, t], |x|,|y| ≤ side/2, and a sphere resting 0.05 m above it;
+/// lattice jittered by ±0.1 spacing.
+fn blob(a: &SurfaceBenchArgs) -> ParticleFrame {
+    let dx = a.spacing;
+    let mut f = ParticleFrame::default();
+    let mut s = 1u64;
+    let ps = dx * (3.0 / (4.0 * std::f64::consts::PI)).cbrt();
+    let c = Vec3::new(0.0, 0.0, a.slab_thickness + 0.05 + a.sphere_radius);
+    let half = a.slab_side / 2.0;
+    let n = ((half.max(c.z + a.sphere_radius)) / dx).ceil() as i64 + 1;
+    for i in -n..=n {
+        for j in -n..=n {
+            for k in 0..=(2 * n) {
+                let p = Vec3::new(i as f64, j as f64, k as f64) * dx;
+                let in_slab = p.x.abs() <= half && p.y.abs() <= half && p.z <= a.slab_thickness;
+                let in_ball = (p - c).norm() <= a.sphere_radius;
+                if in_slab || in_ball {
+                    let mut jit = || (rand01(&mut s) - 0.5) * 0.2 * dx;
+                    let q = p + Vec3::new(jit(), jit(), jit());
+                    let v = if in_ball {
+                        Vec3::new(0.0, 0.0, -1.0)
+                    } else {
+                        Vec3::zeros()
+                    };
+                    let id = f.len() as u32;
+                    f.push(q, v, id, 0, ps, 1000.0 * dx * dx * dx, Vec3::zeros());
+                }
+            }
+        }
+    }
+    if a.extras {
+        add_extras(&mut f, a);
+    }
+    f
+}
+
+/// A horizontal sheet beside the slab, a helix above it, and three droplets.
+fn add_extras(f: &mut ParticleFrame, a: &SurfaceBenchArgs) {
+    let ds = a.spacing;
+    let th = 0.2 * ds;
+    let x0 = a.slab_side / 2.0 + 4.0 * ds + 0.25 * a.slab_side;
+    let n = (0.25 * a.slab_side / ds) as i64;
+    for i in -n..=n {
+        for j in -n..=n {
+            let p = Vec3::new(x0 + i as f64 * ds, j as f64 * ds, 0.5 * a.slab_thickness);
+            let id = f.len() as u32;
+            f.push(
+                p,
+                Vec3::new(0.0, 0.0, 0.5),
+                id,
+                1,
+                0.5 * th,
+                1000.0 * ds * ds * th,
+                Vec3::z(),
+            );
+        }
+    }
+    let (r, pitch, rt) = (0.2 * a.slab_side, 0.1 * a.slab_side, 0.4 * ds);
+    let c = pitch / (2.0 * std::f64::consts::PI);
+    let speed = (r * r + c * c).sqrt();
+    let steps = (3.0 * 2.0 * std::f64::consts::PI * speed / (0.5 * ds)) as i64;
+    for i in 0..=steps {
+        let t = i as f64 * 0.5 * ds / speed;
+        let p = Vec3::new(
+            -x0 + r * t.cos(),
+            r * t.sin(),
+            a.slab_thickness + 2.0 * ds + c * t,
+        );
+        let tan = Vec3::new(-r * t.sin(), r * t.cos(), c) / speed;
+        let id = f.len() as u32;
+        let m = 1000.0 * std::f64::consts::PI * rt * rt * 0.5 * ds;
+        f.push(p, tan, id, 2, rt, m, tan);
+    }
+    for k in 0..3 {
+        let p = Vec3::new(
+            0.3 * a.slab_side,
+            (k as f64 - 1.0) * 0.1 * a.slab_side,
+            a.slab_thickness + 0.2 * a.slab_side,
+        );
+        let id = f.len() as u32;
+        f.push(
+            p,
+            Vec3::new(0.0, 0.0, -2.0),
+            id,
+            3,
+            0.6 * ds,
+            1000.0 * ds.powi(3),
+            Vec3::zeros(),
+        );
+    }
+}
+
+/// Peak resident memory of a process (VmHWM, bytes), from /proc.
+fn peak_rss(pid: &str) -> Option<u64> {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let l = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    l.split_whitespace()
+        .nth(1)?
+        .parse::<u64>()
+        .ok()
+        .map(|k| k * 1024)
+}
+
+fn which(name: &str) -> Option<std::path::PathBuf> {
+    std::env::var_os("PATH").and_then(|p| {
+        std::env::split_paths(&p)
+            .map(|d| d.join(name))
+            .find(|p| p.is_file())
+    })
+}
+
+/// Runs splashsurf on the particles; returns (wall s, peak bytes, triangles if reported).
+fn run_splashsurf(bin: &Path, f: &ParticleFrame, radius: f64, dir: &Path) -> Result<(f64, u64)> {
+    let input = dir.join("blob.xyz");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&input)?);
+    for p in &f.pos {
+        for c in [p.x, p.y, p.z] {
+            w.write_all(&(c as f32).to_le_bytes())?;
+        }
+    }
+    w.flush()?;
+    drop(w);
+    let t = Instant::now();
+    let mut child = Command::new(bin)
+        .arg("reconstruct")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.join("blob.obj"))
+        .arg(format!("--particle-radius={radius}"))
+        .arg("--smoothing-length=2.0")
+        .arg("--cube-size=1.0")
+        .arg("--surface-threshold=0.6")
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .context("starting splashsurf")?;
+    let pid = child.id().to_string();
+    let mut peak = 0;
+    loop {
+        if let Some(st) = child.try_wait()? {
+            anyhow::ensure!(st.success(), "splashsurf failed: {st}");
+            break;
+        }
+        peak = peak.max(peak_rss(&pid).unwrap_or(0));
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    Ok((t.elapsed().as_secs_f64(), peak))
+}
+
+/// Runs the benchmark and prints a markdown table.
+pub fn run(a: SurfaceBenchArgs) -> Result<()> {
+    let t = Instant::now();
+    let f = blob(&a);
+    let gen = t.elapsed().as_secs_f64();
+    let radius = a.spacing / 2.0;
+    let before = peak_rss("self").unwrap_or(0);
+    println!(
+        "particles: {} (sphere r = {} m on a {}×{}×{} m slab, spacing {} m, jitter ±0.1), voxel {} m, threads {}, generated in {:.2} s, RSS before surfacing {:.0} MB\n",
+        f.len(),
+        a.sphere_radius,
+        a.slab_side,
+        a.slab_side,
+        a.slab_thickness,
+        a.spacing,
+        radius,
+        rayon::current_num_threads(),
+        gen,
+        before as f64 / 1e6
+    );
+    println!("| kernels | total (s) | kernels | density | band | union | mesh | write | peak RSS (MB) | leaves | active voxels | triangles | volume err |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let modes: &[bool] = if a.isotropic_too {
+        &[true, false]
+    } else {
+        &[true]
+    };
+    let mut ours = (0.0, 0);
+    for &aniso in modes {
+        let mut o = SurfaceOptions {
+            voxel_size: Some(radius),
+            ..Default::default()
+        };
+        o.aniso.anisotropic = aniso;
+        let t = Instant::now();
+        let g = surfacer::surface_particles(&f, &o)?;
+        let mut total = t.elapsed().as_secs_f64();
+        let mut wt = 0.0;
+        if let Some(dir) = &a.write {
+            std::fs::create_dir_all(dir)?;
+            let t = Instant::now();
+            surfacer::pipeline::write_outputs(dir, 1, &g)?;
+            wt = t.elapsed().as_secs_f64();
+            total += wt;
+        }
+        let peak = peak_rss("self").unwrap_or(0);
+        let st = &g.stats;
+        let pvol = f.codim.iter().filter(|&&c| c == 0).count() as f64 * a.spacing.powi(3);
+        println!(
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {:+.2} % |",
+            if aniso { "anisotropic" } else { "isotropic" },
+            total,
+            st.seconds[0],
+            st.seconds[1],
+            st.seconds[2],
+            st.seconds[3],
+            st.seconds[4],
+            wt,
+            peak as f64 / 1e6,
+            st.leaves,
+            st.active_voxels,
+            st.triangles,
+            100.0 * (g.mesh.volume() / pvol - 1.0)
+        );
+        eprintln!(
+            "  {}: density blocks {}, grid bytes {:.0} MB, isotropic kernels {}, redistance {:?}, volume shift {:.2e} m",
+            if aniso { "anisotropic" } else { "isotropic" },
+            st.density_blocks,
+            st.grid_bytes as f64 / 1e6,
+            st.isotropic_kernels,
+            st.redistance,
+            st.volume_shift
+        );
+        if aniso {
+            ours = (total, peak);
+        }
+    }
+    match which("splashsurf") {
+        Some(bin) => {
+            let dir = tempfile_dir()?;
+            let (ts, ps) = run_splashsurf(&bin, &f, radius, &dir)?;
+            let _ = std::fs::remove_dir_all(&dir);
+            println!(
+                "\nsplashsurf (isotropic): {ts:.2} s, peak RSS {:.0} MB",
+                ps as f64 / 1e6
+            );
+            println!(
+                "codimfx anisotropic / splashsurf: time × {:.2}, memory × {:.2}",
+                ours.0 / ts,
+                ours.1 as f64 / ps as f64
+            );
+        }
+        None => {
+            println!("\nsplashsurf: not on PATH, comparison skipped (cargo install splashsurf)")
+        }
+    }
+    Ok(())
+}
+
+fn tempfile_dir() -> Result<std::path::PathBuf> {
+    let d = std::env::temp_dir().join(format!("codimfx-bench-surface-{}", std::process::id()));
+    std::fs::create_dir_all(&d)?;
+    Ok(d)
+}

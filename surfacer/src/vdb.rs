@@ -1,0 +1,281 @@
+//! OpenVDB writer for the level set (`surface`, FloatGrid, class `level set`) and its velocity
+//! (`v`, Vec3SGrid), in OpenVDB's own file format version 224 with a 5-4-3 tree and zip
+//! compression. vdb-rs only reads, and no maintained Rust crate writes VDB; the layout follows
+//! OpenVDB's `io/Archive.cc`, `io/Compression.h` and the node classes (facts in
+//! `shared/notes/vdb-format.md`, decision in `docs/decisions.md`).
+//!
+//! Layout: header (magic, version, library version, "has grid offsets", UUID, file metadata, grid
+//! count); per grid a descriptor (name, type, parent, three stream offsets) and the grid
+//! (compression flags, metadata, transform `UniformScaleMap`, topology, leaf buffers).
+//! Topology: root (background, tiles, children sorted by origin) → 32³ internal nodes → 16³
+//! internal nodes → 8³ leaves; each internal node writes child mask, value mask and its tile
+//! values (metadata byte 6 "all values" + zipped buffer), then its children in index order.
+//! Inactive voxels and tiles inside the surface hold −background (from [`LevelSet::inside`]), so
+//! readers see the inside as inside.
+use crate::hash::Key;
+use crate::levelset::LevelSet;
+use crate::SurfaceError;
+use flate2::write::ZlibEncoder;
+use flate2::Compression;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+
+const COMPRESS_ZIP: u32 = 1;
+const ALL_VALUES: u8 = 6;
+
+struct Out(Vec<u8>);
+
+impl Out {
+    fn u8(&mut self, v: u8) {
+        self.0.push(v);
+    }
+    fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn i32(&mut self, v: i32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn i64(&mut self, v: i64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn str(&mut self, s: &str) {
+        self.u32(s.len() as u32);
+        self.0.extend_from_slice(s.as_bytes());
+    }
+    fn mask(&mut self, words: &[u64]) {
+        for w in words {
+            self.0.extend_from_slice(&w.to_le_bytes());
+        }
+    }
+    /// OpenVDB `zipToStream`: i64 size then zlib data, or −size then raw bytes.
+    fn zipped(&mut self, raw: &[u8]) {
+        let mut e = ZlibEncoder::new(Vec::new(), Compression::fast());
+        let z = e.write_all(raw).and_then(|_| e.finish());
+        match z {
+            Ok(z) if z.len() < raw.len() => {
+                self.i64(z.len() as i64);
+                self.0.extend_from_slice(&z);
+            }
+            _ => {
+                self.i64(-(raw.len() as i64));
+                self.0.extend_from_slice(raw);
+            }
+        }
+    }
+    fn values(&mut self, raw: &[u8]) {
+        self.u8(ALL_VALUES);
+        self.zipped(raw);
+    }
+}
+
+/// Internal-node hierarchy: level-2 origin → level-1 origin → (leaf slots, inside-tile slots).
+type Tree = BTreeMap<Key, BTreeMap<Key, (Vec<usize>, Vec<usize>)>>;
+
+fn mask_bit(words: &mut [u64], i: usize) {
+    words[i >> 6] |= 1 << (i & 63);
+}
+
+fn n1_index(k: Key) -> usize {
+    ((((k[0] & 127) >> 3) << 8) | (((k[1] & 127) >> 3) << 4) | ((k[2] & 127) >> 3)) as usize
+}
+
+fn n2_index(k: Key) -> usize {
+    ((((k[0] & 4095) >> 7) << 10) | (((k[1] & 4095) >> 7) << 5) | ((k[2] & 4095) >> 7)) as usize
+}
+
+fn build_tree(ls: &LevelSet) -> Tree {
+    let mut t: Tree = BTreeMap::new();
+    let up = |k: Key, m: i32| [k[0] & !m, k[1] & !m, k[2] & !m];
+    for (i, l) in ls.leaves.iter().enumerate() {
+        let e = t.entry(up(l.origin, 4095)).or_default();
+        e.entry(up(l.origin, 127)).or_default().0.push(i);
+    }
+    for (i, k) in ls.inside.iter().enumerate() {
+        let e = t.entry(up(*k, 4095)).or_default();
+        e.entry(up(*k, 127)).or_default().1.push(i);
+    }
+    t
+}
+
+/// Which grid is being written.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    Surface,
+    Velocity,
+}
+
+fn f32_bytes(v: impl Iterator<Item = f32>) -> Vec<u8> {
+    v.flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
+    let (name, ty) = match kind {
+        Kind::Surface => ("surface", "Tree_float_5_4_3"),
+        Kind::Velocity => ("v", "Tree_vec3s_5_4_3"),
+    };
+    let comps = if kind == Kind::Surface { 1 } else { 3 };
+    let bg = if kind == Kind::Surface {
+        ls.background
+    } else {
+        0.0
+    };
+    o.str(name);
+    o.str(ty);
+    o.str("");
+    let offsets_at = o.0.len();
+    o.i64(0);
+    o.i64(0);
+    o.i64(0);
+    let grid_pos = o.0.len();
+    o.u32(COMPRESS_ZIP);
+    // metadata
+    let class = if kind == Kind::Surface {
+        "level set"
+    } else {
+        "unknown"
+    };
+    let mut meta: Vec<(&str, &str)> = vec![("class", class), ("name", name)];
+    if kind == Kind::Velocity {
+        meta.push(("vector_type", "contravariant relative"));
+    }
+    o.u32(meta.len() as u32);
+    for (k, v) in meta {
+        o.str(k);
+        o.str("string");
+        o.str(v);
+    }
+    // transform
+    let h = ls.voxel;
+    o.str("UniformScaleMap");
+    for v in [h, h, 1.0 / h, 1.0 / (h * h), 0.5 / h] {
+        for _ in 0..3 {
+            o.f64(v);
+        }
+    }
+    // topology
+    o.u32(1);
+    for _ in 0..comps {
+        o.0.extend_from_slice(&bg.to_le_bytes());
+    }
+    o.u32(0);
+    o.u32(tree.len() as u32);
+    let tile = |inside: bool| -> [f32; 3] {
+        match kind {
+            Kind::Surface => [if inside { -bg } else { bg }, 0.0, 0.0],
+            Kind::Velocity => [0.0; 3],
+        }
+    };
+    let push_val = |buf: &mut Vec<f32>, v: [f32; 3]| buf.extend_from_slice(&v[..comps]);
+    for (o2, n1s) in tree {
+        for c in o2 {
+            o.i32(*c);
+        }
+        let mut child2 = vec![0u64; 512];
+        for o1 in n1s.keys() {
+            mask_bit(&mut child2, n2_index(*o1));
+        }
+        o.mask(&child2);
+        o.mask(&vec![0u64; 512]);
+        let mut vals = Vec::with_capacity(32768 * comps);
+        for i in 0..32768 {
+            let is_child = child2[i >> 6] >> (i & 63) & 1 == 1;
+            push_val(&mut vals, if is_child { [0.0; 3] } else { tile(false) });
+        }
+        o.values(&f32_bytes(vals.into_iter()));
+        for (o1, (leaves, insides)) in n1s {
+            let mut child1 = vec![0u64; 64];
+            for &l in leaves {
+                mask_bit(&mut child1, n1_index(ls.leaves[l].origin));
+            }
+            let mut inside1 = vec![false; 4096];
+            for &k in insides {
+                inside1[n1_index(ls.inside[k])] = true;
+            }
+            o.mask(&child1);
+            o.mask(&[0u64; 64]);
+            let mut vals = Vec::with_capacity(4096 * comps);
+            for (i, &ins) in inside1.iter().enumerate() {
+                let is_child = child1[i >> 6] >> (i & 63) & 1 == 1;
+                push_val(&mut vals, if is_child { [0.0; 3] } else { tile(ins) });
+            }
+            o.values(&f32_bytes(vals.into_iter()));
+            let _ = o1;
+            // leaves in index order (leaves are sorted by origin, which is index order here)
+            let mut ls_sorted = leaves.clone();
+            ls_sorted.sort_by_key(|&l| n1_index(ls.leaves[l].origin));
+            for l in ls_sorted {
+                o.mask(&ls.leaves[l].active);
+            }
+        }
+    }
+    // buffers, same order
+    let block_pos = o.0.len();
+    for n1s in tree.values() {
+        for (leaves, _) in n1s.values() {
+            let mut ls_sorted = leaves.clone();
+            ls_sorted.sort_by_key(|&l| n1_index(ls.leaves[l].origin));
+            for l in ls_sorted {
+                let leaf = &ls.leaves[l];
+                o.mask(&leaf.active);
+                let raw = match kind {
+                    Kind::Surface => f32_bytes(leaf.phi.iter().copied()),
+                    Kind::Velocity => f32_bytes(leaf.vel.iter().flat_map(|v| v.iter().copied())),
+                };
+                o.values(&raw);
+            }
+        }
+    }
+    let end_pos = o.0.len();
+    let mut at = offsets_at;
+    for v in [grid_pos, block_pos, end_pos] {
+        o.0[at..at + 8].copy_from_slice(&(v as i64).to_le_bytes());
+        at += 8;
+    }
+}
+
+/// Encodes the level set and its velocity as a VDB file in memory.
+pub fn encode(ls: &LevelSet) -> Vec<u8> {
+    let tree = build_tree(ls);
+    let mut o = Out(Vec::new());
+    o.i64(0x5644_4220);
+    o.u32(224);
+    o.u32(10);
+    o.u32(0);
+    o.u8(1);
+    // a UUID derived from the contents, so identical inputs give identical files
+    let mut hsh = crate::hash::FxHasher::default();
+    use std::hash::Hasher;
+    for l in &ls.leaves {
+        hsh.write_i32(l.origin[0]);
+        hsh.write_i32(l.origin[1]);
+        hsh.write_i32(l.origin[2]);
+    }
+    hsh.write_u64(ls.voxel.to_bits());
+    let a = hsh.finish();
+    let b = a.rotate_left(29) ^ 0x9E37_79B9_7F4A_7C15;
+    let hex = format!("{a:016x}{b:016x}");
+    let uuid = format!(
+        "{}-{}-{}-{}-{}",
+        &hex[0..8],
+        &hex[8..12],
+        &hex[12..16],
+        &hex[16..20],
+        &hex[20..32]
+    );
+    o.0.extend_from_slice(uuid.as_bytes());
+    o.u32(0);
+    o.u32(2);
+    write_grid(&mut o, ls, &tree, Kind::Surface);
+    write_grid(&mut o, ls, &tree, Kind::Velocity);
+    o.0
+}
+
+/// Writes `surface` and `v` to `path`, atomically.
+pub fn write_vdb(path: &Path, ls: &LevelSet) -> Result<(), SurfaceError> {
+    let bytes = encode(ls);
+    crate::ply::write_atomically(path, |w| w.write_all(&bytes))
+}
