@@ -6,9 +6,11 @@
 
 pub mod area;
 pub mod emitter;
+pub mod film;
 pub mod gas;
 pub mod linsolve;
 pub mod math;
+pub mod mls;
 pub mod neighbors;
 pub mod particles;
 pub mod reseed;

@@ -181,7 +181,9 @@ pub struct TensionSolution {
     pub info: [SolveInfo; 3],
 }
 
-/// Assembles A = M − σΔt² S L (identity rows for fixed particles).
+/// Assembles A = I − σΔt² M⁻¹ S L: eq. (16) with every row divided by the
+/// particle's mass, so rows of light and heavy particles are on one scale
+/// (identity rows for fixed particles).
 pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveError> {
     let l = Csr::from_faer(sys.laplacian)?;
     let n = l.nrows;
@@ -192,9 +194,10 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
             t.push(Triplet::new(i, i, 1.0));
             continue;
         }
-        t.push(Triplet::new(i, i, sys.mass[i]));
+        t.push(Triplet::new(i, i, 1.0));
+        let ci = c * sys.area[i] / sys.mass[i];
         for k in l.row_ptr[i]..l.row_ptr[i + 1] {
-            t.push(Triplet::new(i, l.col[k], -c * sys.area[i] * l.val[k]));
+            t.push(Triplet::new(i, l.col[k], -ci * l.val[k]));
         }
     }
     SparseRowMat::try_new_from_triplets(n, n, &t)
@@ -223,9 +226,9 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
                 if sys.fixed[i] {
                     sys.u[i][d]
                 } else {
-                    sys.sigma * sys.dt * sys.area[i] * lx[i]
-                        + sys.mass[i] * sys.u[i][d]
-                        + sys.dt * sys.f_explicit[i][d]
+                    (sys.sigma * sys.dt * sys.area[i] * lx[i] + sys.dt * sys.f_explicit[i][d])
+                        / sys.mass[i]
+                        + sys.u[i][d]
                 }
             })
             .collect();
