@@ -61,3 +61,27 @@ fn catenoid_settles_to_the_minimal_surface() {
     assert!(p.all_finite());
     assert!((p.total_mass() - m0).abs() < 1e-12 * m0, "mass changed");
 }
+
+#[test]
+fn sphere_deformation_reseeding_keeps_the_sheet_and_returns() {
+    use codimfx::film::deformation::{run, DeformationSetup};
+    // coarse version of Fig. 15 (paper: ~50k → ~170k → ~100k particles)
+    let set = DeformationSetup::paper(0.01);
+    let h = set.h_over_spacing * set.spacing;
+    let r = run(&set, |_, _| {}).unwrap();
+    // stretching adds particles, the return removes most of them again
+    assert!(
+        r.particles_max_stretch as f64 > 2.0 * r.particles_start as f64,
+        "{r:?}"
+    );
+    assert!(
+        r.particles_end < r.particles_max_stretch && r.particles_end > r.particles_start,
+        "{r:?}"
+    );
+    // the exact end state is the initial sphere (R = 0.15): errors well inside h
+    assert!(r.mean_distance_rel * 0.15 < 0.01 * h, "{r:?}");
+    assert!(r.max_distance_rel * 0.15 < 0.5 * h, "{r:?}");
+    // at maximal stretch the sheet has no hole larger than the reseeding grid resolves
+    assert!(r.coverage_max_stretch > 0.85, "{r:?}");
+    assert!(r.max_gap_max_stretch < 0.8, "{r:?}");
+}

@@ -8,6 +8,7 @@
 //! tension. Scenes with a liquid volume use the coupled step instead.
 
 pub mod catenoid;
+pub mod deformation;
 pub mod step;
 
 use crate::gas::GasPocket;
