@@ -6,6 +6,7 @@
 
 pub mod area;
 pub mod emitter;
+pub mod film;
 pub mod gas;
 pub mod linsolve;
 pub mod math;

@@ -72,20 +72,15 @@ pub fn filament_role(
     }
 }
 
-/// Explicit rim force on rim particle `p`: σ S_r / r along the in-plane
-/// normal ±b² oriented towards the sheet neighbours' centroid, times
-/// `modulation` (1 for a plain rim).
-pub fn rim_force(
-    p: usize,
-    frame: &Mat3,
-    x: &[Vec3],
-    codim: &[Codim],
-    nbrs: &[u32],
-    sigma: Real,
-    s_rim: Real,
-    r: Real,
-    modulation: Real,
-) -> Vec3 {
+/// Explicit rim force on rim particle `p`: σ S_r / r times `modulation`
+/// (1 for a plain rim), along the rim's in-plane normal pointing into the
+/// sheet. The paper takes b² of F_p, the frame of the rim particle's
+/// neighbourhood *including* its sheet neighbours; here that direction is
+/// formed directly as the offset to the sheet neighbours' centroid with its
+/// component along the rim tangent (b¹ of the filament frame, `frame`
+/// column 0) removed — the same vector, without depending on how PCA orders
+/// two nearly equal eigenvalues.
+pub fn rim_force(p: usize, frame: &Mat3, x: &[Vec3], codim: &[Codim], nbrs: &[u32], sigma: Real, s_rim: Real, r: Real, modulation: Real) -> Vec3 {
     let mut c = Vec3::zeros();
     let mut n = 0;
     for &q in nbrs {
@@ -97,21 +92,14 @@ pub fn rim_force(
     if n == 0 || r <= 0.0 {
         return Vec3::zeros();
     }
-    let d = c / n as Real - x[p];
-    let mut b2: Vec3 = frame.column(1).into();
-    // b² lies in the sheet plane; fall back to the projected direction when it is ambiguous
-    let b3: Vec3 = frame.column(2).into();
-    let dp = d - b3 * d.dot(&b3);
-    if b2.dot(&dp).abs() < 1e-3 * dp.norm() {
-        b2 = if dp.norm() > 0.0 {
-            dp.normalize()
-        } else {
-            return Vec3::zeros();
-        };
-    } else if b2.dot(&dp) < 0.0 {
-        b2 = -b2;
+    let t: Vec3 = frame.column(0).into();
+    let mut d = c / n as Real - x[p];
+    d -= t * d.dot(&t);
+    let len = d.norm();
+    if len == 0.0 || !len.is_finite() {
+        return Vec3::zeros();
     }
-    b2 * (sigma * s_rim / r * modulation)
+    d * (sigma * s_rim / r * modulation / len)
 }
 
 /// Explicit bud force on bud particle `p`: σ (2/r) S_b along ±b¹ oriented
@@ -181,7 +169,9 @@ pub struct TensionSolution {
     pub info: [SolveInfo; 3],
 }
 
-/// Assembles A = M − σΔt² S L (identity rows for fixed particles).
+/// Assembles A = I − σΔt² M⁻¹ S L: eq. (16) with every row divided by the
+/// particle's mass, so rows of light and heavy particles are on one scale
+/// (identity rows for fixed particles).
 pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveError> {
     let l = Csr::from_faer(sys.laplacian)?;
     let n = l.nrows;
@@ -192,9 +182,10 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
             t.push(Triplet::new(i, i, 1.0));
             continue;
         }
-        t.push(Triplet::new(i, i, sys.mass[i]));
+        t.push(Triplet::new(i, i, 1.0));
+        let ci = c * sys.area[i] / sys.mass[i];
         for k in l.row_ptr[i]..l.row_ptr[i + 1] {
-            t.push(Triplet::new(i, l.col[k], -c * sys.area[i] * l.val[k]));
+            t.push(Triplet::new(i, l.col[k], -ci * l.val[k]));
         }
     }
     SparseRowMat::try_new_from_triplets(n, n, &t)
@@ -223,9 +214,9 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
                 if sys.fixed[i] {
                     sys.u[i][d]
                 } else {
-                    sys.sigma * sys.dt * sys.area[i] * lx[i]
-                        + sys.mass[i] * sys.u[i][d]
-                        + sys.dt * sys.f_explicit[i][d]
+                    (sys.sigma * sys.dt * sys.area[i] * lx[i] + sys.dt * sys.f_explicit[i][d])
+                        / sys.mass[i]
+                        + sys.u[i][d]
                 }
             })
             .collect();

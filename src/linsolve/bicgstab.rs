@@ -4,6 +4,9 @@
 use super::{dot, norm, Csr, Preconditioner, SolveError, SolveInfo};
 use rayon::prelude::*;
 
+/// Restarts allowed after a ρ breakdown (the shadow residual is reset to the current residual).
+const MAX_RESTARTS: usize = 5;
+
 /// Parameters of a BiCGSTAB solve.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BicgstabParams {
@@ -70,7 +73,8 @@ pub fn bicgstab(
     let mut tmp = vec![0.0; n];
     a.matvec(x, &mut tmp);
     axpy_into(&mut r, b, -1.0, &tmp);
-    let r0 = r.clone();
+    let mut r0 = r.clone();
+    let mut restarts = 0;
     let (mut rho, mut alpha, mut omega) = (1.0f64, 1.0f64, 1.0f64);
     let mut v = vec![0.0; n];
     let mut p = vec![0.0; n];
@@ -87,14 +91,25 @@ pub fn bicgstab(
         });
     }
     for it in 1..=prm.max_iter {
-        let rho_new = dot(&r0, &r);
-        if rho_new == 0.0 || !rho_new.is_finite() {
-            x.copy_from_slice(&best);
-            return Err(SolveError::Breakdown {
-                iteration: it,
-                what: "rho",
-                value: rho_new,
-            });
+        let mut rho_new = dot(&r0, &r);
+        if rho_new.abs() <= 1e-30 * norm(&r0) * norm(&r) || !rho_new.is_finite() {
+            // (near-)orthogonal shadow residual: restart from the current residual
+            if restarts >= MAX_RESTARTS || !rho_new.is_finite() {
+                x.copy_from_slice(&best);
+                return Err(SolveError::Breakdown {
+                    iteration: it,
+                    what: "rho",
+                    value: rho_new,
+                });
+            }
+            restarts += 1;
+            r0.copy_from_slice(&r);
+            p.iter_mut().for_each(|e| *e = 0.0);
+            v.iter_mut().for_each(|e| *e = 0.0);
+            rho = 1.0;
+            alpha = 1.0;
+            omega = 1.0;
+            rho_new = dot(&r0, &r);
         }
         let beta = (rho_new / rho) * (alpha / omega);
         rho = rho_new;

@@ -1,0 +1,466 @@
+//! One film step (Algorithm 1 for sheets, filaments and points, no grid).
+//!
+//! 1. advect: x += Δt u (fixed boundary particles move with their
+//!    prescribed velocity);
+//! 2. codimension update (§8) on the joint sheet + filament set;
+//! 3. reseeding (§9), new particles lifted onto the local MLS fit;
+//! 4. control areas (Appendix D), thickness/radius from mass, explicit
+//!    forces: gravity, air drag, wind, enclosed gas, rim and bud tension
+//!    (§6); points move ballistically;
+//! 5. viscosity (§5, eq. 13) with the joint Laplacian, only when μ > 0;
+//! 6. semi-implicit surface tension (eq. 16) on the joint Laplacian with
+//!    the sheet weight in filament fits set to 0 (§7).
+//!
+//! The step works on a sub-store of the sheet and filament particles in
+//! joint order (sheets then filaments) so that neighbour lists, frames and
+//! matrix rows share one index; the store is rebuilt at the end with the
+//! other particles first, in their previous order.
+
+use super::{FilmError, FilmParams, FilmState, FilmStepInfo};
+use crate::area::{
+    filament_areas, filament_length, filament_radius, sheet_half_thickness, surface_tension_area,
+    voronoi_area,
+};
+use crate::gas::{enclosed_volume, orient_normals, pressure_forces, wind_force};
+use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
+use crate::math::{Mat3, Real, Vec3};
+use crate::mls::operators::{par_fit_map, par_frames, Neighborhoods};
+use crate::mls::{JointLaplacian, MlsParams};
+use crate::particles::{Codim, Particles};
+use crate::reseed::{reseed, LocalShape};
+use crate::tension::{
+    bud_force, filament_role, rim_force, sawtooth, solve as solve_tension, FilamentRole,
+    TensionSystem,
+};
+use crate::transition::update_codims;
+use faer::sparse::{SparseRowMat, Triplet};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Local geometry of every joint particle, as a Taylor quadratic of its fit
+/// (scaled coordinates η = ξ/h): slope and second derivatives at η = 0.
+struct FittedShape {
+    h: Real,
+    geo: Vec<Option<([Real; 2], [Real; 3])>>,
+}
+
+impl LocalShape for FittedShape {
+    fn height(&self, p: usize, u: Real, v: Real) -> Real {
+        let Some((s, d)) = self.geo[p] else {
+            return 0.0;
+        };
+        let (a, b) = (u / self.h, v / self.h);
+        self.h * (s[0] * a + s[1] * b + 0.5 * (d[0] * a * a + 2.0 * d[1] * a * b + d[2] * b * b))
+    }
+    fn curve(&self, p: usize, u: Real) -> (Real, Real) {
+        let Some((s, d)) = self.geo[p] else {
+            return (0.0, 0.0);
+        };
+        let a = u / self.h;
+        (
+            self.h * (s[0] * a + 0.5 * d[0] * a * a),
+            self.h * (s[1] * a + 0.5 * d[1] * a * a),
+        )
+    }
+}
+
+fn first_non_finite(p: &Particles) -> Option<u64> {
+    (0..p.len())
+        .find(|&i| {
+            !(p.x[i].iter().chain(p.v[i].iter()).all(|c| c.is_finite())
+                && p.mass[i].is_finite()
+                && p.radius[i].is_finite())
+        })
+        .map(|i| p.id[i])
+}
+
+fn check(p: &Particles, stage: &'static str) -> Result<(), FilmError> {
+    match first_non_finite(p) {
+        Some(id) => Err(FilmError::NonFinite { stage, id }),
+        None => Ok(()),
+    }
+}
+
+/// Splits the store into (others, film sub-store in joint order).
+fn split(parts: &Particles) -> (Particles, Particles) {
+    let mut others = Particles {
+        next_id: parts.next_id,
+        ..Particles::default()
+    };
+    let mut film = Particles {
+        next_id: parts.next_id,
+        ..Particles::default()
+    };
+    let copy = |dst: &mut Particles, i: usize| {
+        dst.x.push(parts.x[i]);
+        dst.v.push(parts.v[i]);
+        dst.mass.push(parts.mass[i]);
+        dst.radius.push(parts.radius[i]);
+        dst.codim.push(parts.codim[i]);
+        dst.id.push(parts.id[i]);
+        dst.fixed.push(parts.fixed[i]);
+    };
+    for c in [Codim::Sheet, Codim::Filament] {
+        for i in (0..parts.len()).filter(|&i| parts.codim[i] == c) {
+            copy(&mut film, i);
+        }
+    }
+    for i in (0..parts.len()).filter(|&i| !matches!(parts.codim[i], Codim::Sheet | Codim::Filament))
+    {
+        copy(&mut others, i);
+    }
+    (others, film)
+}
+
+/// Re-joins the two parts (others first).
+fn join(mut others: Particles, film: Particles) -> Particles {
+    others.next_id = others.next_id.max(film.next_id);
+    others.x.extend(film.x);
+    others.v.extend(film.v);
+    others.mass.extend(film.mass);
+    others.radius.extend(film.radius);
+    others.codim.extend(film.codim);
+    others.id.extend(film.id);
+    others.fixed.extend(film.fixed);
+    others
+}
+
+/// Moves points (C = 3) and filament particles that left the joint set:
+/// gravity and drag only.
+fn ballistic(p: &mut Particles, prm: &FilmParams, dt: Real) {
+    for i in 0..p.len() {
+        if p.codim[i] == Codim::Point && !p.fixed[i] {
+            p.v[i] += prm.gravity * dt;
+            p.v[i] *= 1.0 / (1.0 + prm.damping * dt);
+        }
+    }
+}
+
+/// Runs one film step of length `dt` on `parts`.
+pub fn step(
+    parts: &mut Particles,
+    state: &mut FilmState,
+    prm: &FilmParams,
+    dt: Real,
+) -> Result<FilmStepInfo, FilmError> {
+    let mut info = FilmStepInfo::default();
+    let h = prm.mls.h;
+
+    // 1. advection
+    let t = Instant::now();
+    parts
+        .x
+        .par_iter_mut()
+        .zip(parts.v.par_iter())
+        .for_each(|(x, v)| *x += v * dt);
+    check(parts, "advect")?;
+    info.timings.advect = t.elapsed().as_secs_f64();
+
+    // 2. codimension update on the joint set
+    let t = Instant::now();
+    let (mut others, mut film) = split(parts);
+    let geom_mls = MlsParams {
+        sheet_weight_in_filament: 0.0,
+        ..prm.mls
+    };
+    if film.len() > 0 && (prm.transitions.is_some() || prm.reseed.is_some()) {
+        let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
+        let frames = par_frames(&nb, &geom_mls);
+        let axes: Vec<Mat3> = frames.iter().map(|f| f.axes).collect();
+        if let Some(tp) = &prm.transitions {
+            info.transitions = update_codims(
+                &film.x,
+                &mut film.codim,
+                &film.fixed,
+                &axes,
+                |i| nb.lists.of(i),
+                tp,
+            );
+        }
+        info.timings.transition = t.elapsed().as_secs_f64();
+        // 3. reseeding
+        let t = Instant::now();
+        if let Some(rp) = &prm.reseed {
+            let (geo, _) = par_fit_map(&nb, &frames, &geom_mls, |_, f| {
+                f.map(|f| (f.slope, f.second))
+            });
+            let shape = FittedShape { h, geo };
+            info.reseed = reseed(&mut film, &axes, |i| nb.lists.of(i), &shape, rp);
+        }
+        info.timings.reseed = t.elapsed().as_secs_f64();
+    } else {
+        info.timings.transition = t.elapsed().as_secs_f64();
+    }
+    // points that just appeared leave the film set
+    let (more_others, film) = split(&film);
+    others = join(others, more_others);
+    others.next_id = others.next_id.max(film.next_id);
+    let mut film = film;
+    ballistic(&mut others, prm, dt);
+    if film.is_empty() {
+        *parts = others;
+        check(parts, "reseed")?;
+        return Ok(info);
+    }
+
+    // 4. areas, thickness, explicit forces
+    let t = Instant::now();
+    let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
+    let frames = par_frames(&nb, &geom_mls);
+    let n = film.len();
+    let n_sheet = nb.n_sheet;
+    let rho = prm.density;
+    // one-face Voronoi areas of sheet particles (sheet neighbours only)
+    let voronoi: Vec<Real> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            if i >= n_sheet {
+                return 0.0;
+            }
+            let nbrs = nb
+                .lists
+                .of(i)
+                .iter()
+                .filter(|&&q| (q as usize) < n_sheet)
+                .map(|&q| film.x[q as usize]);
+            voronoi_area(&film.x[i], &frames[i].axes, nbrs, h)
+        })
+        .collect();
+    let lengths: Vec<Real> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            if i < n_sheet {
+                return 0.0;
+            }
+            let nbrs = nb
+                .lists
+                .of(i)
+                .iter()
+                .filter(|&&q| q as usize >= n_sheet)
+                .map(|&q| film.x[q as usize]);
+            filament_length(&film.x[i], nbrs, 0.5 * h)
+        })
+        .collect();
+    let roles: Vec<FilamentRole> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            filament_role(
+                i,
+                &frames[i].axes,
+                &film.x,
+                &film.codim,
+                nb.lists.of(i),
+                h,
+                prm.bud_angle,
+            )
+        })
+        .collect();
+    let mut area = vec![0.0; n];
+    let mut f = vec![Vec3::zeros(); n];
+    for i in 0..n {
+        if i < n_sheet {
+            if voronoi[i] > 0.0 {
+                film.radius[i] = sheet_half_thickness(film.mass[i], voronoi[i], rho);
+            }
+            area[i] = surface_tension_area(voronoi[i], prm.free_film);
+        } else {
+            let l = lengths[i];
+            let r = filament_radius(film.mass[i], l, rho);
+            film.radius[i] = r;
+            let a = filament_areas(r, l);
+            match roles[i] {
+                FilamentRole::Rim => {
+                    area[i] = a.rim_filament;
+                    let m = prm
+                        .rim_modulation
+                        .map_or(1.0, |(k, amp, c)| sawtooth(&film.x[i], &c, k, amp));
+                    f[i] += rim_force(
+                        i,
+                        &frames[i].axes,
+                        &film.x,
+                        &film.codim,
+                        nb.lists.of(i),
+                        prm.sigma,
+                        a.rim,
+                        r,
+                        m,
+                    );
+                }
+                FilamentRole::Bud => {
+                    area[i] = a.lateral;
+                    f[i] += bud_force(
+                        i,
+                        &frames[i].axes,
+                        &film.x,
+                        &film.codim,
+                        nb.lists.of(i),
+                        prm.sigma,
+                        a.bud,
+                        r,
+                    );
+                }
+                _ => area[i] = a.lateral,
+            }
+        }
+        f[i] += prm.gravity * film.mass[i] - film.v[i] * (prm.damping * film.mass[i]);
+    }
+    // enclosed gas and wind act along the sheet normals
+    if state.gas.is_some() || prm.wind.is_some() {
+        let mut normals: Vec<Vec3> = frames[..n_sheet].iter().map(|fr| fr.axis(2)).collect();
+        let sheet_nbrs: Vec<Vec<u32>> = (0..n_sheet)
+            .map(|i| {
+                nb.lists
+                    .of(i)
+                    .iter()
+                    .copied()
+                    .filter(|&q| (q as usize) < n_sheet)
+                    .collect()
+            })
+            .collect();
+        orient_normals(&film.x[..n_sheet], &mut normals, |i| &sheet_nbrs[i]);
+        if let Some(g) = &state.gas {
+            let v = enclosed_volume(&film.x[..n_sheet], &normals, &voronoi[..n_sheet]);
+            info.gas_volume = Some(v);
+            for (i, fp) in pressure_forces(&normals, &voronoi[..n_sheet], g.excess_pressure(v))
+                .into_iter()
+                .enumerate()
+            {
+                f[i] += fp;
+            }
+        }
+        if let Some(w) = &prm.wind {
+            for i in 0..n_sheet {
+                f[i] += wind_force(
+                    &w.velocity,
+                    &film.v[i],
+                    &normals[i],
+                    area[i],
+                    w.air_density,
+                    w.drag,
+                );
+            }
+        }
+    }
+    info.timings.forces = t.elapsed().as_secs_f64();
+
+    // 5. viscosity (eq. 13), only when μ > 0
+    let mut u: Vec<Vec3> = film.v.clone();
+    if prm.viscosity > 0.0 {
+        let t = Instant::now();
+        let lv = JointLaplacian::assemble(&nb, &prm.mls)?;
+        info.viscosity_solve = viscosity(&lv.matrix, &film, &mut u, prm, dt)?;
+        info.timings.viscosity = t.elapsed().as_secs_f64();
+    }
+
+    // 6. semi-implicit surface tension (eq. 16)
+    let t = Instant::now();
+    let l = JointLaplacian::assemble(&nb, &geom_mls)?;
+    info.fits = l.stats;
+    info.timings.operators = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let sys = TensionSystem {
+        laplacian: l.matrix.as_ref(),
+        mass: &film.mass,
+        area: &area,
+        x: &film.x,
+        u: &u,
+        f_explicit: &f,
+        fixed: &film.fixed,
+        sigma: prm.sigma,
+        dt,
+    };
+    let sol = solve_tension(&sys, &prm.solver).map_err(|e| FilmError::Solve {
+        stage: "surface tension",
+        source: e,
+    })?;
+    info.tension_solve = sol.info;
+    for i in 0..n {
+        if !film.fixed[i] {
+            film.v[i] = sol.u[i];
+        }
+    }
+    info.timings.tension = t.elapsed().as_secs_f64();
+    *parts = join(others, film);
+    check(parts, "surface tension")?;
+    Ok(info)
+}
+
+/// Implicit viscosity on the film particles: (M − μΔt V L) u = M u*.
+fn viscosity(
+    l: &SparseRowMat<usize, Real>,
+    film: &Particles,
+    u: &mut [Vec3],
+    prm: &FilmParams,
+    dt: Real,
+) -> Result<[SolveInfo; 3], FilmError> {
+    let err = |e| FilmError::Solve {
+        stage: "viscosity",
+        source: e,
+    };
+    let lc = Csr::from_faer(l.as_ref()).map_err(err)?;
+    let n = lc.nrows;
+    let mut t = Vec::with_capacity(lc.val.len() + n);
+    for i in 0..n {
+        t.push(Triplet::new(i, i, film.mass[i]));
+        if film.fixed[i] {
+            continue;
+        }
+        let c = prm.viscosity * dt * film.mass[i] / prm.density;
+        for k in lc.row_ptr[i]..lc.row_ptr[i + 1] {
+            t.push(Triplet::new(i, lc.col[k], -c * lc.val[k]));
+        }
+    }
+    let a = SparseRowMat::try_new_from_triplets(n, n, &t)
+        .map_err(|e| err(crate::linsolve::SolveError::Dimension(format!("{e:?}"))))?;
+    let ac = Csr::from_faer(a.as_ref()).map_err(err)?;
+    let ilu = Ilu0::new(&ac).map_err(err)?;
+    let mut info = [SolveInfo::default(); 3];
+    for d in 0..3 {
+        let b: Vec<Real> = (0..n).map(|i| film.mass[i] * u[i][d]).collect();
+        let mut x: Vec<Real> = u.iter().map(|v| v[d]).collect();
+        info[d] = bicgstab(&ac, &b, &mut x, &ilu, &prm.solver).map_err(err)?;
+        for i in 0..n {
+            u[i][d] = x[i];
+        }
+    }
+    Ok(info)
+}
+
+/// Runs [`step`], halving the step (up to `max_halvings` times) when a
+/// solve fails or a value turns non-finite; the state is restored before
+/// each retry. Returns the info of the last sub-step and the number of
+/// halvings used.
+pub fn step_with_retry(
+    parts: &mut Particles,
+    state: &mut FilmState,
+    prm: &FilmParams,
+    dt: Real,
+    max_halvings: u32,
+) -> Result<(FilmStepInfo, u32), FilmError> {
+    let mut halvings = 0;
+    loop {
+        let saved = (parts.clone(), state.clone());
+        let n = 1u32 << halvings;
+        let sub = dt / n as Real;
+        let mut last = Ok(FilmStepInfo::default());
+        for _ in 0..n {
+            last = step(parts, state, prm, sub);
+            if last.is_err() {
+                break;
+            }
+        }
+        match last {
+            Ok(i) => return Ok((i, halvings)),
+            Err(e) if halvings >= max_halvings => {
+                *parts = saved.0;
+                *state = saved.1;
+                return Err(e);
+            }
+            Err(_) => {
+                *parts = saved.0;
+                *state = saved.1;
+                halvings += 1;
+            }
+        }
+    }
+}
