@@ -2,12 +2,21 @@
 //!
 //! The paper's bubbles (Figs. 2, 9) do not say how a closed film keeps its
 //! volume; without it surface tension alone collapses a soap bubble (the
-//! Laplace pressure 4σ/R is unbalanced). codimfx gives each closed film an
-//! isothermal ideal gas: p_in V = p_0 V_0, with V the volume the film
-//! encloses and p_0 the pressure at which the rest volume V_0 is in balance
-//! (p_0 − p_atm = 4σ/R_0 for a sphere of radius R_0, both faces). The
-//! excess pressure acts on each sheet particle along its outward normal:
-//! f_i = (p_in − p_atm) A_i n_i, with A_i the one-face Voronoi area.
+//! Laplace pressure 4σ/R is unbalanced). Without air, even an open (bursting)
+//! spherical film collapses in 1/π of the time its rim needs to retract
+//! (collapse time R√(ρτ/2σ) against πR/v_TC with v_TC = √(2σ/ρτ), whatever
+//! σ and τ), while in reality the air inside cannot leave that fast.
+//! codimfx gives such a film an isothermal gas pocket: p_in V = p_0 V_0,
+//! with V the volume the film encloses and p_0 the pressure at which the
+//! rest volume V_0 is in balance (p_0 − p_atm = 4σ/R_0 for a sphere of
+//! radius R_0, both faces). The excess pressure acts on each sheet particle
+//! along its outward normal: f_i = (p_in − p_atm) A_i n_i, with A_i the
+//! one-face Voronoi area. The pressure force is explicit, so the ambient
+//! pressure p_atm sets the stiffness: with the real 101 kPa a 0.1 % volume
+//! error gives 100 Pa against a Laplace pressure of 0.03 Pa and the step
+//! blows up; presets use p_atm = 0 (a *soft* gas whose pressure scale is the
+//! Laplace pressure itself), which keeps the shape without that stiffness.
+//! A rest volume V_0 ≤ 0 is measured on the first step.
 //!
 //! Volume (divergence theorem): V = ⅓ Σ A_i (x_i − c)·n_i over the film's
 //! sheet particles with outward unit normals n_i and any reference point c.
@@ -90,6 +99,31 @@ pub fn enclosed_volume(x: &[Vec3], normals: &[Vec3], area: &[Real]) -> Real {
         .map(|((p, n), a)| a * (p - c).dot(n))
         .sum::<Real>()
         / 3.0
+}
+
+/// Least-squares sphere through oriented surface samples: minimises
+/// Σ a_i |x_i − c − R n_i|² over the centre c and radius R (a 4×4 linear
+/// system). Unlike the divergence-theorem volume it does not change when a
+/// hole opens in the film, so it measures the *gas* volume of an open
+/// (bursting) bubble as (4/3)πR³. Returns `None` for degenerate input.
+pub fn fit_sphere(x: &[Vec3], normals: &[Vec3], area: &[Real]) -> Option<(Vec3, Real)> {
+    // unknowns (c, R): rows [I | n_i] weighted by a_i
+    let mut m = nalgebra::Matrix4::<Real>::zeros();
+    let mut b = nalgebra::Vector4::<Real>::zeros();
+    for ((p, n), a) in x.iter().zip(normals).zip(area) {
+        let row = [
+            nalgebra::Vector4::new(1.0, 0.0, 0.0, n.x),
+            nalgebra::Vector4::new(0.0, 1.0, 0.0, n.y),
+            nalgebra::Vector4::new(0.0, 0.0, 1.0, n.z),
+        ];
+        for (k, r) in row.iter().enumerate() {
+            m += r * r.transpose() * *a;
+            b += r * (p[k] * a);
+        }
+    }
+    let sol = m.lu().solve(&b)?;
+    let r = sol[3];
+    (r.is_finite() && r > 0.0).then(|| (Vec3::new(sol[0], sol[1], sol[2]), r))
 }
 
 /// An isothermal gas pocket enclosed by a film.
@@ -183,6 +217,22 @@ mod tests {
         let v = enclosed_volume(&x, &normals, &area);
         let exact = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
         assert!((v - exact).abs() < 1e-3 * exact, "{v} vs {exact}");
+    }
+
+    #[test]
+    fn sphere_fit_ignores_a_hole() {
+        let (n, r) = (4000, 0.05);
+        let c = Vec3::new(0.3, -0.1, 2.0);
+        let all = golden_sphere(n, r);
+        // open cap: drop the top 30 % of the sphere
+        let x: Vec<Vec3> = all.into_iter().filter(|p| p.z - c.z < 0.4 * r).collect();
+        let normals: Vec<Vec3> = x.iter().map(|p| (p - c).normalize()).collect();
+        let area = vec![1.0; x.len()];
+        let (cf, rf) = fit_sphere(&x, &normals, &area).unwrap();
+        assert!((rf - r).abs() < 1e-12 && (cf - c).norm() < 1e-12, "{rf} {cf}");
+        // the divergence-theorem volume of the open cap is far from the sphere's
+        let v = enclosed_volume(&x, &normals, &area);
+        assert!(v < 0.9 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) * x.len() as Real / n as Real * 1e9);
     }
 
     #[test]

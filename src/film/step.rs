@@ -21,7 +21,7 @@ use crate::area::{
     filament_areas, filament_length, filament_radius, sheet_half_thickness, surface_tension_area,
     voronoi_area,
 };
-use crate::gas::{enclosed_volume, orient_normals, pressure_forces, wind_force};
+use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_force};
 use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
 use crate::math::{Mat3, Real, Vec3};
 use crate::mls::operators::{par_fit_map, par_frames, Neighborhoods};
@@ -318,8 +318,16 @@ pub fn step(
             })
             .collect();
         orient_normals(&film.x[..n_sheet], &mut normals, |i| &sheet_nbrs[i]);
-        if let Some(g) = &state.gas {
-            let v = enclosed_volume(&film.x[..n_sheet], &normals, &voronoi[..n_sheet]);
+        if let Some(g) = state.gas.as_mut() {
+            // gas volume from the best-fit sphere: insensitive to holes
+            let v = fit_sphere(&film.x[..n_sheet], &normals, &voronoi[..n_sheet])
+                .map(|(_, r)| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3))
+                .unwrap_or_else(|| enclosed_volume(&film.x[..n_sheet], &normals, &voronoi[..n_sheet]));
+            if g.v0 <= 0.0 {
+                // rest volume measured on the first step (an open film's
+                // volume differs from the closed sphere's)
+                g.v0 = v;
+            }
             info.gas_volume = Some(v);
             for (i, fp) in pressure_forces(&normals, &voronoi[..n_sheet], g.excess_pressure(v))
                 .into_iter()
