@@ -18,10 +18,9 @@
 //! monolithic tension/coupling solve of §7 replaces the projection call.
 
 use crate::advect::{advect, AdvectInfo};
-use crate::grid::extrapolate::{constrain_solids, extrapolate};
 use crate::grid::pcg::{NotFinite, PcgParams, SolveInfo};
-use crate::grid::projection::{project, ProjectionInfo};
-use crate::grid::transfer::{grid_to_particles, particles_to_grid, sort_particles};
+use crate::grid::projection::{project_liquid, ProjectionInfo};
+use crate::grid::transfer::{grid_to_particles, transfer_to_grid};
 use crate::grid::viscosity::viscosity;
 use crate::grid::MacGrid;
 use crate::math::{Real, Vec3};
@@ -225,36 +224,23 @@ pub fn step(
     debug_check(particles, "body_force")?;
     // 5: particles → grid
     timed(times, "p2g", || {
-        grid.activate(&particles.x, p.margin);
-        grid.compute_weights(solids);
-        let sort = sort_particles(grid, particles);
-        let mut valid = particles_to_grid(grid, particles, &sort, p.surface_radius);
-        extrapolate(grid, &mut valid, p.margin + 1);
-        grid.u_old = grid.u.clone();
+        transfer_to_grid(grid, particles, solids, p.margin, p.surface_radius)
     });
-    info.blocks = grid.blocks.len();
-    info.liquid_volume = grid.liquid_volume();
-    // 6: viscosity (grid part of eq. 13; the MLS part for C-1/C-2 goes here too)
-    if p.viscosity > 0.0 {
+    // 6: viscosity, grid part of eq. (13); the MLS part for C-1/C-2 joins here
+    info.viscosity = if p.viscosity > 0.0 {
         let v = timed(times, "viscosity", || {
             viscosity(grid, p.viscosity, p.density, dt, p.viscous)
         });
-        info.viscosity = Some(v.map_err(StepError::Viscosity)?);
+        Some(v.map_err(StepError::Viscosity)?)
     } else {
-        times.add("viscosity", 0.0);
-    }
-    // 7: projection (the monolithic tension/coupling solve of §7 takes its place)
-    let proj = timed(
-        times,
-        "projection",
-        || -> Result<ProjectionInfo, NotFinite> {
-            let (pi, mut valid) = project(grid, solids, p.pressure)?;
-            extrapolate(grid, &mut valid, p.margin + 1);
-            constrain_solids(grid, solids);
-            Ok(pi)
-        },
-    );
-    info.pressure = proj.map_err(StepError::Pressure)?;
+        times.add("viscosity", 0.0); // skipped (μ = 0): reported as 0
+        None
+    };
+    // 7: projection; the monolithic tension/coupling solve of §7 takes its place
+    info.pressure = timed(times, "projection", || {
+        project_liquid(grid, solids, p.pressure, p.margin + 1)
+    })
+    .map_err(StepError::Pressure)?;
     // 8: grid → particles
     timed(times, "g2p", || grid_to_particles(grid, particles, p.flip));
     debug_check(particles, "g2p")?;
@@ -262,6 +248,8 @@ pub fn step(
     info.advect = timed(times, "advect", || {
         advect(particles, grid, solids, p.lo, p.hi, dt)
     });
+    info.blocks = grid.blocks.len();
+    info.liquid_volume = grid.liquid_volume();
     // 2–3: codimension update (§8) and reseeding (§9) edit `particles` here,
     // through `Particles::retain` / `Particles::push`.
     let bad = count_non_finite(particles);

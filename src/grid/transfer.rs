@@ -18,9 +18,11 @@
 //! neighbours ([`MacGrid::stencil_clamped`]), otherwise a particle resting
 //! next to a wall keeps a growing normal velocity that the grid never sees.
 
+use super::extrapolate::extrapolate;
 use super::{MacGrid, NONE};
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
+use crate::solids::SolidSet;
 use rayon::prelude::*;
 
 /// Codimension-0 particles sorted by the slot of the cell that contains them.
@@ -191,6 +193,25 @@ pub fn particles_to_grid(
     grid.u = u;
     grid.phi = phi;
     valid
+}
+
+/// Algorithm 1 step 5 as one stage: allocate the blocks within `margin`
+/// cells of the particles, compute the cut-cell face weights, sort the
+/// particles by cell, gather the face velocities and the level set, extend the
+/// velocities `margin + 1` layers, and keep a copy for the FLIP update.
+pub fn transfer_to_grid(
+    grid: &mut MacGrid,
+    parts: &Particles,
+    solids: &SolidSet,
+    margin: usize,
+    surface_radius: Real,
+) {
+    grid.activate(&parts.x, margin);
+    grid.compute_weights(solids);
+    let sort = sort_particles(grid, parts);
+    let mut valid = particles_to_grid(grid, parts, &sort, surface_radius);
+    extrapolate(grid, &mut valid, margin + 1);
+    grid.u_old = grid.u.clone();
 }
 
 /// Algorithm 1 step 8: PIC/FLIP update of the codimension-0 particle velocities.
