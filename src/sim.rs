@@ -53,6 +53,16 @@ pub enum SimError {
         /// The stage error.
         source: StepError,
     },
+    /// Sampling produced no particle at all.
+    #[error(
+        "{file}: field `bodies`: no liquid particle left: all {dropped} samples fell inside solids"
+    )]
+    NoLiquid {
+        /// Scene file.
+        file: PathBuf,
+        /// Samples dropped inside solids.
+        dropped: usize,
+    },
     /// The cache cannot be resumed.
     #[error("cannot resume {dir}: {reason}")]
     Resume {
@@ -210,6 +220,13 @@ impl Sim {
                 dropped_in_solid: 0,
             });
         }
+        let (particles, rep) = sample_bodies(&scene, &solids);
+        if particles.is_empty() {
+            return Err(SimError::NoLiquid {
+                file: scene_file.to_path_buf(),
+                dropped: rep.dropped_in_solid,
+            });
+        }
         std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
         // a fresh run replaces an old cache of the same name
         for e in std::fs::read_dir(&dir).map_err(io_err(&dir))?.flatten() {
@@ -218,7 +235,6 @@ impl Sim {
                 std::fs::remove_file(e.path()).map_err(io_err(&e.path()))?;
             }
         }
-        let (particles, rep) = sample_bodies(&scene, &solids);
         let mut manifest = Manifest {
             format: "codimfx-cache".into(),
             version: 1,

@@ -387,6 +387,19 @@ mod tests {
     }
 
     #[test]
+    fn storage_scales_with_the_liquid_not_the_domain() {
+        // 512³ cells (134M); a 2-cell cluster of points allocates at most 2³ blocks
+        let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.0), 1.0 / 512.0);
+        let pts: Vec<Vec3> = (0..100)
+            .map(|i| Vec3::repeat(0.3) + Vec3::repeat(i as Real * 4e-5))
+            .collect();
+        g.activate(&pts, 2);
+        assert!(g.blocks.len() <= 8, "{} blocks", g.blocks.len());
+        assert!(g.slots() <= 8 * BV && g.u[0].len() == g.slots() && g.phi.len() == g.slots());
+        assert_eq!(g.block_of.len(), 64 * 64 * 64);
+    }
+
+    #[test]
     fn fraction_inside_of_half_plane() {
         assert!((fraction_inside([-1.0, 1.0, -1.0, 1.0]) - 0.5).abs() < 1e-12);
         assert_eq!(fraction_inside([-1.0; 4]), 1.0);
