@@ -11,7 +11,7 @@
 //! A stop flag (Ctrl-C in the binary) is checked after every frame.
 
 use crate::grid::MacGrid;
-use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed};
+use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed, SubstepRecord};
 use crate::io::ply::{self, frame_name, PlyError};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
@@ -311,6 +311,12 @@ impl Sim {
             dt_max = dt_max.max(dt);
             let s = &info.pressure.solve;
             rec.pressure.add(s.iterations, s.rel_residual, s.converged);
+            rec.substep_log.push(SubstepRecord {
+                dt,
+                iterations: s.iterations,
+                residual: s.rel_residual,
+                cells: info.pressure.cells,
+            });
             if let Some(v) = info.viscosity {
                 for s in v {
                     rec.viscosity.add(s.iterations, s.rel_residual, s.converged);
