@@ -16,7 +16,7 @@ use crate::io::ply::{self, frame_name, PlyError};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
-use crate::scene::{self, sample_bodies, Scene, SceneError};
+use crate::scene::{self, sample_bodies, Scene, SceneError, Transfer};
 use crate::solids::SolidSet;
 use crate::step::{cfl_dt, step, SimState, StageTimes, StepError, StepParams};
 use std::path::{Path, PathBuf};
@@ -199,8 +199,19 @@ impl Sim {
                     dir: dir.clone(),
                     reason: format!("manifest has no record of frame {f}"),
                 })?;
-            let mut particles = ply::read(&dir.join(frame_name(f)))?.particles;
+            let frame = ply::read(&dir.join(frame_name(f)))?;
+            let mut particles = frame.particles;
             particles.next_id = rec.next_id;
+            let affine = match (params.transfer, frame.affine) {
+                (Transfer::Apic, Some(a)) => a,
+                (Transfer::Apic, None) => {
+                    return Err(SimError::Resume {
+                        dir,
+                        reason: format!("frame {f} has no APIC matrices (c00 … c22)"),
+                    })
+                }
+                (Transfer::Flip, _) => Vec::new(),
+            };
             let mut manifest = manifest;
             manifest.frames.retain(|r| r.frame <= f);
             return Ok(Sim {
@@ -210,6 +221,7 @@ impl Sim {
                     particles,
                     grid,
                     solids,
+                    affine,
                 },
                 params,
                 manifest,
@@ -235,6 +247,8 @@ impl Sim {
                 std::fs::remove_file(e.path()).map_err(io_err(&e.path()))?;
             }
         }
+        let apic_zeros =
+            (params.transfer == Transfer::Apic).then(|| vec![[Vec3::zeros(); 3]; particles.len()]);
         let mut manifest = Manifest {
             format: "codimfx-cache".into(),
             version: 1,
@@ -250,7 +264,7 @@ impl Sim {
             frames_written: 0,
             frames: Vec::new(),
         };
-        let bytes = ply::encode(&particles, None, 0, 0.0)?;
+        let bytes = ply::encode(&particles, None, apic_zeros.as_deref(), 0, 0.0)?;
         let p0 = dir.join(frame_name(0));
         write_atomic(&p0, &bytes).map_err(io_err(&p0))?;
         manifest.frames.push(base_record(0, 0.0, &particles));
@@ -258,11 +272,7 @@ impl Sim {
         Ok(Sim {
             scene,
             dir,
-            state: SimState {
-                particles,
-                grid,
-                solids,
-            },
+            state: SimState::new(particles, grid, solids),
             params,
             manifest,
             frame: 0,
@@ -330,7 +340,9 @@ impl Sim {
             rec.blocks = rec.blocks.max(info.blocks);
         }
         let p = &self.state.particles;
-        let bytes = ply::encode(p, None, f, self.time)?;
+        let affine =
+            (self.params.transfer == Transfer::Apic).then_some(self.state.affine.as_slice());
+        let bytes = ply::encode(p, None, affine, f, self.time)?;
         let path = self.dir.join(frame_name(f));
         write_atomic(&path, &bytes).map_err(io_err(&path))?;
         let base = base_record(f, self.time, p);

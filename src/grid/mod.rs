@@ -296,6 +296,32 @@ impl MacGrid {
         (idx, ws)
     }
 
+    /// [`Self::stencil`] with the gradient (1/m) of each trilinear weight, for APIC.
+    #[inline]
+    pub fn stencil_grad(&self, a: usize, x: &Vec3) -> ([u32; 8], [Real; 8], [Vec3; 8]) {
+        let (idx, w) = self.stencil(a, x);
+        let q = self.to_grid(x);
+        let mut f = [q.x - 0.5, q.y - 0.5, q.z - 0.5];
+        f[a] = q[a];
+        // recover the fractional coordinates the stencil used
+        let mut t = [0.0; 3];
+        for d in 0..3 {
+            let n = self.n[d] as Real;
+            let hi = if d == a { n } else { n - 1.0 };
+            let fd = f[d].clamp(0.0, hi);
+            t[d] = fd - fd.floor().min((hi - 1.0).max(0.0));
+        }
+        let inv = 1.0 / self.dx;
+        let mut g = [Vec3::zeros(); 8];
+        for (k, gk) in g.iter_mut().enumerate() {
+            let o = [k & 1, (k >> 1) & 1, (k >> 2) & 1];
+            let h: [Real; 3] = [0, 1, 2].map(|d| if o[d] == 1 { t[d] } else { 1.0 - t[d] });
+            let s: [Real; 3] = [0, 1, 2].map(|d| if o[d] == 1 { inv } else { -inv });
+            *gk = Vec3::new(s[0] * h[1] * h[2], h[0] * s[1] * h[2], h[0] * h[1] * s[2]);
+        }
+        (idx, w, g)
+    }
+
     /// Grid velocity at `x` (m/s).
     #[inline]
     pub fn velocity(&self, x: &Vec3) -> Vec3 {
