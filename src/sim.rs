@@ -346,20 +346,20 @@ impl Sim {
         let path = self.dir.join(frame_name(f));
         write_atomic(&path, &bytes).map_err(io_err(&path))?;
         let base = base_record(f, self.time, p);
-        rec = FrameRecord {
+        let rec = FrameRecord {
+            frame: base.frame,
+            time: base.time,
+            next_id: base.next_id,
+            counts: base.counts,
+            speed: base.speed,
+            total_mass: base.total_mass,
             substeps,
             dt_min: if substeps > 0 { dt_min } else { 0.0 },
             dt_max,
             stage_s: times.0.clone(),
             wall_s: wall.elapsed().as_secs_f64(),
-            ..FrameRecord { ..rec }
+            ..rec
         };
-        rec.frame = base.frame;
-        rec.time = base.time;
-        rec.next_id = base.next_id;
-        rec.counts = base.counts;
-        rec.speed = base.speed;
-        rec.total_mass = base.total_mass;
         self.totals.merge(&times);
         self.frame = f;
         self.manifest.frames.push(rec.clone());
