@@ -56,6 +56,8 @@ pub struct MacGrid {
     pub weight: [Vec<Real>; 3],
     /// Liquid level set at cell centres (m), negative inside the liquid.
     pub phi: Vec<Real>,
+    /// Face-neighbour slots (−x, +x, −y, +y, −z, +z) of every slot, or [`NONE`].
+    pub nbr: Vec<[u32; 6]>,
 }
 
 impl MacGrid {
@@ -114,11 +116,23 @@ impl MacGrid {
         (c[0] as usize) < self.n[0] && (c[1] as usize) < self.n[1] && (c[2] as usize) < self.n[2]
     }
 
-    /// Neighbour slot of `s` shifted by `off` cells.
+    /// Neighbour slot of `s` shifted by `off` cells (face neighbours from the table).
     #[inline]
     pub fn neighbor(&self, s: usize, off: [isize; 3]) -> Option<usize> {
-        let c = self.cell(s);
-        self.slot(c[0] + off[0], c[1] + off[1], c[2] + off[2])
+        let d = match off {
+            [-1, 0, 0] => 0,
+            [1, 0, 0] => 1,
+            [0, -1, 0] => 2,
+            [0, 1, 0] => 3,
+            [0, 0, -1] => 4,
+            [0, 0, 1] => 5,
+            _ => {
+                let c = self.cell(s);
+                return self.slot(c[0] + off[0], c[1] + off[1], c[2] + off[2]);
+            }
+        };
+        let t = self.nbr[s][d];
+        (t != NONE).then_some(t as usize)
     }
 
     /// Position in cell units (cell centres at half-integers).
@@ -174,6 +188,31 @@ impl MacGrid {
         }
         self.phi.clear();
         self.phi.resize(ns, self.dx);
+        let g: &MacGrid = self;
+        let nbr: Vec<[u32; 6]> = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                let c = g.cell(s);
+                let mut n = [NONE; 6];
+                for (d, o) in [
+                    [-1, 0, 0],
+                    [1, 0, 0],
+                    [0, -1, 0],
+                    [0, 1, 0],
+                    [0, 0, -1],
+                    [0, 0, 1],
+                ]
+                .iter()
+                .enumerate()
+                {
+                    if let Some(t) = g.slot(c[0] + o[0], c[1] + o[1], c[2] + o[2]) {
+                        n[d] = t as u32;
+                    }
+                }
+                n
+            })
+            .collect();
+        self.nbr = nbr;
     }
 
     /// World position of the centre of face `a` of slot `s`.
