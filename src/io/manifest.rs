@@ -113,6 +113,7 @@ pub struct FrameRecord {
     /// Counted corrections.
     pub fallbacks: Fallbacks,
     /// Every substep's length and pressure solve, in order.
+    #[serde(default)]
     pub substep_log: Vec<SubstepRecord>,
 }
 
