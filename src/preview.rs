@@ -274,13 +274,53 @@ mod tests {
             &[0.2],
             &[Codim::Filament],
             &cam,
-            64,
-            48,
-            1.0,
+            &ImageSize {
+                width: 64,
+                height: 48,
+                splat: 1.0,
+            },
+            &[],
+            0.0,
         );
         let c = img.get_pixel(32, 24);
         assert!(c[0] > c[2] && c[0] > 60, "centre pixel {c:?}");
         // corners stay background
         assert_eq!(img.get_pixel(0, 0)[0], img.get_pixel(63, 0)[0]);
+    }
+
+    #[test]
+    fn solid_points_lie_on_the_solids_and_inside_the_box() {
+        let solids = [
+            Solid::Sphere {
+                center: [0.5, 0.0, 0.5],
+                radius: 0.2,
+            },
+            Solid::Cylinder {
+                center: [0.2, 0.5, 0.2],
+                axis: [0.0, 1.0, 0.0],
+                radius: 0.1,
+                height: 0.4,
+            },
+            Solid::Plane {
+                point: [0.0, 0.1, 0.0],
+                normal: [0.0, 1.0, 0.0],
+            },
+        ];
+        let (lo, hi) = (Vec3::zeros(), Vec3::repeat(1.0));
+        let pts = solid_points(&solids, lo, hi, 0.02);
+        let set = crate::solids::SolidSet::from_scene(&solids);
+        assert!(pts.len() > 1000);
+        for p in &pts {
+            assert!(
+                (0..3).all(|d| p[d] >= -1e-9 && p[d] <= 1.0 + 1e-9),
+                "{p:?} outside the box"
+            );
+            // on the union's surface or inside it (caps and overlaps), never outside
+            assert!(
+                set.phi(p) < 1e-9,
+                "{p:?} off the solids: phi = {}",
+                set.phi(p)
+            );
+        }
     }
 }
