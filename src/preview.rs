@@ -8,6 +8,7 @@
 
 use crate::math::{Real, Vec3};
 use crate::particles::Codim;
+use crate::scene::Solid;
 use image::{Rgb, RgbImage};
 
 /// A pinhole or orthographic camera.
@@ -54,16 +55,140 @@ pub fn codim_color(c: Codim) -> [Real; 3] {
     }
 }
 
-/// Renders particles into a `width × height` image.
+/// Image size and disc scale of a render.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageSize {
+    /// Width (pixels).
+    pub width: u32,
+    /// Height (pixels).
+    pub height: u32,
+    /// Disc radius relative to the particle radius.
+    pub splat: Real,
+}
+
+/// Display colour of static solids.
+pub const SOLID_COLOR: [Real; 3] = [0.55, 0.55, 0.52];
+
+/// Points on the surfaces of the scene's solids, about `h` apart, clipped to
+/// the domain box `[lo, hi]`, drawn grey by [`render`] so the liquid can be
+/// judged against what it hits.
+pub fn solid_points(solids: &[Solid], lo: Vec3, hi: Vec3, h: Real) -> Vec<Vec3> {
+    let v = |a: &[f64; 3]| Vec3::new(a[0], a[1], a[2]);
+    let inside = |p: &Vec3| (0..3).all(|d| p[d] >= lo[d] - 1e-9 && p[d] <= hi[d] + 1e-9);
+    let basis = |n: Vec3| {
+        let t = if n.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
+        let a = n.cross(&t).normalize();
+        (a, n.cross(&a))
+    };
+    let mut out = Vec::new();
+    let patch = |c: Vec3, a: Vec3, b: Vec3, ra: Real, rb: Real, out: &mut Vec<Vec3>| {
+        let (na, nb) = ((2.0 * ra / h).ceil() as i64, (2.0 * rb / h).ceil() as i64);
+        for i in 0..=na {
+            for j in 0..=nb {
+                let p = c
+                    + a * (-ra + 2.0 * ra * i as Real / na.max(1) as Real)
+                    + b * (-rb + 2.0 * rb * j as Real / nb.max(1) as Real);
+                if inside(&p) {
+                    out.push(p);
+                }
+            }
+        }
+    };
+    let diag = (hi - lo).norm();
+    for s in solids {
+        match s {
+            Solid::Plane { point, normal } => {
+                let n = v(normal).normalize();
+                let (a, b) = basis(n);
+                // the plane point closest to the box centre, then a patch covering the box
+                let c = (lo + hi) * 0.5;
+                let c = c - n * (c - v(point)).dot(&n);
+                patch(c, a, b, diag, diag, &mut out);
+            }
+            Solid::Box { min, max } => {
+                let (bl, bh) = (v(min), v(max));
+                let c = (bl + bh) * 0.5;
+                let e = (bh - bl) * 0.5;
+                for d in 0..3 {
+                    let (d1, d2) = ((d + 1) % 3, (d + 2) % 3);
+                    for sgn in [-1.0, 1.0] {
+                        let mut fc = c;
+                        fc[d] += sgn * e[d];
+                        let mut a = Vec3::zeros();
+                        a[d1] = 1.0;
+                        let mut b = Vec3::zeros();
+                        b[d2] = 1.0;
+                        patch(fc, a, b, e[d1], e[d2], &mut out);
+                    }
+                }
+            }
+            Solid::Sphere { center, radius } => {
+                let n = ((4.0 * std::f64::consts::PI * radius * radius / (h * h)).ceil() as usize)
+                    .max(12);
+                let ga = std::f64::consts::PI * (3.0 - (5.0 as Real).sqrt());
+                for i in 0..n {
+                    let z = 1.0 - 2.0 * (i as Real + 0.5) / n as Real;
+                    let rho = (1.0 - z * z).sqrt();
+                    let t = ga * i as Real;
+                    let p = v(center) + Vec3::new(rho * t.cos(), z, rho * t.sin()) * *radius;
+                    if inside(&p) {
+                        out.push(p);
+                    }
+                }
+            }
+            Solid::Cylinder {
+                center,
+                axis,
+                radius,
+                height,
+            } => {
+                let ax = v(axis).normalize();
+                let (a, b) = basis(ax);
+                let c = v(center);
+                let nr = ((2.0 * std::f64::consts::PI * radius / h).ceil() as usize).max(12);
+                let nh = ((height / h).ceil() as usize).max(1);
+                for i in 0..nr {
+                    let t = 2.0 * std::f64::consts::PI * i as Real / nr as Real;
+                    let dir = a * t.cos() + b * t.sin();
+                    for j in 0..=nh {
+                        let p = c + ax * (height * (j as Real / nh as Real - 0.5)) + dir * *radius;
+                        if inside(&p) {
+                            out.push(p);
+                        }
+                    }
+                    // caps
+                    let nc = ((radius / h).ceil() as usize).max(1);
+                    for k in 0..nc {
+                        for sgn in [-0.5, 0.5] {
+                            let p =
+                                c + ax * (height * sgn) + dir * (*radius * k as Real / nc as Real);
+                            if inside(&p) {
+                                out.push(p);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Renders particles (and grey solid surface points) into a `width × height` image.
 pub fn render(
     x: &[Vec3],
     radius: &[Real],
     codim: &[Codim],
     cam: &Camera,
-    width: u32,
-    height: u32,
-    splat: Real,
+    size: &ImageSize,
+    solid_points: &[Vec3],
+    solid_radius: Real,
 ) -> RgbImage {
+    let (width, height, splat) = (size.width, size.height, size.splat);
     let (w, h) = (width as usize, height as usize);
     let f = (cam.target - cam.eye).normalize();
     let mut r = f.cross(&cam.up);
@@ -78,21 +203,19 @@ pub fn render(
     let mut zbuf = vec![Real::INFINITY; w * h];
     let mut col = vec![[0.0f32; 3]; w * h];
     let light = (u * 0.6 - f + r * 0.3).normalize();
-    for i in 0..x.len() {
-        let rel = x[i] - cam.eye;
+    let mut draw = |pos: &Vec3, rw: Real, base: [Real; 3]| {
+        let rel = pos - cam.eye;
         let z = rel.dot(&f);
         if !cam.ortho && z <= 1e-6 {
-            continue;
+            return;
         }
         let scale = if cam.ortho { ortho_scale } else { focal / z };
         let sx = 0.5 * w as Real + rel.dot(&r) * scale;
         let sy = 0.5 * h as Real - rel.dot(&u) * scale;
-        let rw = radius[i] * splat;
         let pr = (rw * scale).max(0.7);
         if sx + pr < 0.0 || sy + pr < 0.0 || sx - pr > w as Real || sy - pr > h as Real {
-            continue;
+            return;
         }
-        let base = codim_color(codim[i]);
         let (x0, x1) = (
             (sx - pr).floor().max(0.0) as usize,
             ((sx + pr).ceil() as usize).min(w),
@@ -120,6 +243,12 @@ pub fn render(
                 }
             }
         }
+    };
+    for i in 0..x.len() {
+        draw(&x[i], radius[i] * splat, codim_color(codim[i]));
+    }
+    for p in solid_points {
+        draw(p, solid_radius, SOLID_COLOR);
     }
     RgbImage::from_fn(width, height, |px, py| {
         let k = py as usize * w + px as usize;
@@ -145,13 +274,53 @@ mod tests {
             &[0.2],
             &[Codim::Filament],
             &cam,
-            64,
-            48,
-            1.0,
+            &ImageSize {
+                width: 64,
+                height: 48,
+                splat: 1.0,
+            },
+            &[],
+            0.0,
         );
         let c = img.get_pixel(32, 24);
         assert!(c[0] > c[2] && c[0] > 60, "centre pixel {c:?}");
         // corners stay background
         assert_eq!(img.get_pixel(0, 0)[0], img.get_pixel(63, 0)[0]);
+    }
+
+    #[test]
+    fn solid_points_lie_on_the_solids_and_inside_the_box() {
+        let solids = [
+            Solid::Sphere {
+                center: [0.5, 0.0, 0.5],
+                radius: 0.2,
+            },
+            Solid::Cylinder {
+                center: [0.2, 0.5, 0.2],
+                axis: [0.0, 1.0, 0.0],
+                radius: 0.1,
+                height: 0.4,
+            },
+            Solid::Plane {
+                point: [0.0, 0.1, 0.0],
+                normal: [0.0, 1.0, 0.0],
+            },
+        ];
+        let (lo, hi) = (Vec3::zeros(), Vec3::repeat(1.0));
+        let pts = solid_points(&solids, lo, hi, 0.02);
+        let set = crate::solids::SolidSet::from_scene(&solids);
+        assert!(pts.len() > 1000);
+        for p in &pts {
+            assert!(
+                (0..3).all(|d| p[d] >= -1e-9 && p[d] <= 1.0 + 1e-9),
+                "{p:?} outside the box"
+            );
+            // on the union's surface or inside it (caps and overlaps), never outside
+            assert!(
+                set.phi(p) < 1e-9,
+                "{p:?} off the solids: phi = {}",
+                set.phi(p)
+            );
+        }
     }
 }

@@ -11,12 +11,12 @@
 //! A stop flag (Ctrl-C in the binary) is checked after every frame.
 
 use crate::grid::MacGrid;
-use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed};
+use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed, SubstepRecord};
 use crate::io::ply::{self, frame_name, PlyError};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
-use crate::scene::{self, sample_bodies, Scene, SceneError};
+use crate::scene::{self, sample_bodies, Scene, SceneError, Transfer};
 use crate::solids::SolidSet;
 use crate::step::{cfl_dt, step, SimState, StageTimes, StepError, StepParams};
 use std::path::{Path, PathBuf};
@@ -52,6 +52,16 @@ pub enum SimError {
         time: Real,
         /// The stage error.
         source: StepError,
+    },
+    /// Sampling produced no particle at all.
+    #[error(
+        "{file}: field `bodies`: no liquid particle left: all {dropped} samples fell inside solids"
+    )]
+    NoLiquid {
+        /// Scene file.
+        file: PathBuf,
+        /// Samples dropped inside solids.
+        dropped: usize,
     },
     /// The cache cannot be resumed.
     #[error("cannot resume {dir}: {reason}")]
@@ -189,8 +199,19 @@ impl Sim {
                     dir: dir.clone(),
                     reason: format!("manifest has no record of frame {f}"),
                 })?;
-            let mut particles = ply::read(&dir.join(frame_name(f)))?.particles;
+            let frame = ply::read(&dir.join(frame_name(f)))?;
+            let mut particles = frame.particles;
             particles.next_id = rec.next_id;
+            let affine = match (params.transfer, frame.affine) {
+                (Transfer::Apic, Some(a)) => a,
+                (Transfer::Apic, None) => {
+                    return Err(SimError::Resume {
+                        dir,
+                        reason: format!("frame {f} has no APIC matrices (c00 … c22)"),
+                    })
+                }
+                (Transfer::Flip, _) => Vec::new(),
+            };
             let mut manifest = manifest;
             manifest.frames.retain(|r| r.frame <= f);
             return Ok(Sim {
@@ -200,6 +221,7 @@ impl Sim {
                     particles,
                     grid,
                     solids,
+                    affine,
                 },
                 params,
                 manifest,
@@ -210,6 +232,13 @@ impl Sim {
                 dropped_in_solid: 0,
             });
         }
+        let (particles, rep) = sample_bodies(&scene, &solids);
+        if particles.is_empty() {
+            return Err(SimError::NoLiquid {
+                file: scene_file.to_path_buf(),
+                dropped: rep.dropped_in_solid,
+            });
+        }
         std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
         // a fresh run replaces an old cache of the same name
         for e in std::fs::read_dir(&dir).map_err(io_err(&dir))?.flatten() {
@@ -218,7 +247,8 @@ impl Sim {
                 std::fs::remove_file(e.path()).map_err(io_err(&e.path()))?;
             }
         }
-        let (particles, rep) = sample_bodies(&scene, &solids);
+        let apic_zeros =
+            (params.transfer == Transfer::Apic).then(|| vec![[Vec3::zeros(); 3]; particles.len()]);
         let mut manifest = Manifest {
             format: "codimfx-cache".into(),
             version: 1,
@@ -234,7 +264,7 @@ impl Sim {
             frames_written: 0,
             frames: Vec::new(),
         };
-        let bytes = ply::encode(&particles, None, 0, 0.0)?;
+        let bytes = ply::encode(&particles, None, apic_zeros.as_deref(), 0, 0.0)?;
         let p0 = dir.join(frame_name(0));
         write_atomic(&p0, &bytes).map_err(io_err(&p0))?;
         manifest.frames.push(base_record(0, 0.0, &particles));
@@ -242,11 +272,7 @@ impl Sim {
         Ok(Sim {
             scene,
             dir,
-            state: SimState {
-                particles,
-                grid,
-                solids,
-            },
+            state: SimState::new(particles, grid, solids),
             params,
             manifest,
             frame: 0,
@@ -295,6 +321,12 @@ impl Sim {
             dt_max = dt_max.max(dt);
             let s = &info.pressure.solve;
             rec.pressure.add(s.iterations, s.rel_residual, s.converged);
+            rec.substep_log.push(SubstepRecord {
+                dt,
+                iterations: s.iterations,
+                residual: s.rel_residual,
+                cells: info.pressure.cells,
+            });
             if let Some(v) = info.viscosity {
                 for s in v {
                     rec.viscosity.add(s.iterations, s.rel_residual, s.converged);
@@ -308,24 +340,26 @@ impl Sim {
             rec.blocks = rec.blocks.max(info.blocks);
         }
         let p = &self.state.particles;
-        let bytes = ply::encode(p, None, f, self.time)?;
+        let affine =
+            (self.params.transfer == Transfer::Apic).then_some(self.state.affine.as_slice());
+        let bytes = ply::encode(p, None, affine, f, self.time)?;
         let path = self.dir.join(frame_name(f));
         write_atomic(&path, &bytes).map_err(io_err(&path))?;
         let base = base_record(f, self.time, p);
-        rec = FrameRecord {
+        let rec = FrameRecord {
+            frame: base.frame,
+            time: base.time,
+            next_id: base.next_id,
+            counts: base.counts,
+            speed: base.speed,
+            total_mass: base.total_mass,
             substeps,
             dt_min: if substeps > 0 { dt_min } else { 0.0 },
             dt_max,
             stage_s: times.0.clone(),
             wall_s: wall.elapsed().as_secs_f64(),
-            ..FrameRecord { ..rec }
+            ..rec
         };
-        rec.frame = base.frame;
-        rec.time = base.time;
-        rec.next_id = base.next_id;
-        rec.counts = base.counts;
-        rec.speed = base.speed;
-        rec.total_mass = base.total_mass;
         self.totals.merge(&times);
         self.frame = f;
         self.manifest.frames.push(rec.clone());

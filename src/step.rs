@@ -7,7 +7,7 @@
 //! | 5 | particles → grid (C-0), liquid level set | `grid::transfer` |
 //! | 6 | viscosity on the grid, eq. (13) (skipped when μ = 0) | `grid::viscosity` |
 //! | 7 | projection (ghost-fluid free surface, cut-cell solids) | `grid::projection` |
-//! | 8 | grid → particles, PIC/FLIP | `grid::transfer` |
+//! | 8 | grid → particles, PIC/FLIP or APIC | `grid::transfer` |
 //! | 1 | advection (midpoint rule through the grid) | `advect` |
 //!
 //! Algorithm 1 is a cycle; this substep starts at step 4 and ends with the
@@ -18,15 +18,14 @@
 //! monolithic tension/coupling solve of §7 replaces the projection call.
 
 use crate::advect::{advect, AdvectInfo};
-use crate::grid::extrapolate::{constrain_solids, extrapolate};
 use crate::grid::pcg::{NotFinite, PcgParams, SolveInfo};
-use crate::grid::projection::{project, ProjectionInfo};
-use crate::grid::transfer::{grid_to_particles, particles_to_grid, sort_particles};
+use crate::grid::projection::{project_liquid, ProjectionInfo};
+use crate::grid::transfer::{grid_to_particles, grid_to_particles_apic, transfer_to_grid};
 use crate::grid::viscosity::viscosity;
 use crate::grid::MacGrid;
 use crate::math::{Real, Vec3};
 use crate::particles::Particles;
-use crate::scene::Scene;
+use crate::scene::{Scene, Transfer};
 use crate::solids::SolidSet;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -86,6 +85,8 @@ pub struct StepParams {
     pub density: Real,
     /// Viscosity μ (Pa·s).
     pub viscosity: Real,
+    /// Transfer scheme.
+    pub transfer: Transfer,
     /// FLIP fraction.
     pub flip: Real,
     /// Level-set particle radius relative to Δx.
@@ -110,6 +111,7 @@ impl StepParams {
             accel: Vec3::new(a[0], a[1], a[2]),
             density: s.physics.density,
             viscosity: s.physics.viscosity,
+            transfer: s.solver.transfer,
             flip: s.solver.flip,
             surface_radius: s.solver.surface_radius,
             pressure: PcgParams {
@@ -136,6 +138,22 @@ pub struct SimState {
     pub grid: MacGrid,
     /// Static solids.
     pub solids: SolidSet,
+    /// APIC affine velocity per particle (row a = ∇u_a, 1/s), aligned with
+    /// `particles`; empty unless `solver.transfer: apic`. Stages that insert
+    /// or delete particles keep it aligned (new particles: zero).
+    pub affine: Vec<[Vec3; 3]>,
+}
+
+impl SimState {
+    /// A state with no APIC data yet (it is sized on the first APIC substep).
+    pub fn new(particles: Particles, grid: MacGrid, solids: SolidSet) -> SimState {
+        SimState {
+            particles,
+            grid,
+            solids,
+            affine: Vec::new(),
+        }
+    }
 }
 
 /// What one substep did.
@@ -213,10 +231,15 @@ pub fn step(
         dt,
         ..Default::default()
     };
+    let apic = p.transfer == Transfer::Apic;
+    if apic {
+        st.affine.resize(st.particles.len(), [Vec3::zeros(); 3]);
+    }
     let SimState {
         particles,
         grid,
         solids,
+        affine,
     } = st;
     // 4: body force
     timed(times, "body_force", || {
@@ -225,43 +248,36 @@ pub fn step(
     debug_check(particles, "body_force")?;
     // 5: particles → grid
     timed(times, "p2g", || {
-        grid.activate(&particles.x, p.margin);
-        grid.compute_weights(solids);
-        let sort = sort_particles(grid, particles);
-        let mut valid = particles_to_grid(grid, particles, &sort, p.surface_radius);
-        extrapolate(grid, &mut valid, p.margin + 1);
-        grid.u_old = grid.u.clone();
+        let c = apic.then_some(affine.as_slice());
+        transfer_to_grid(grid, particles, solids, p.margin, p.surface_radius, c)
     });
-    info.blocks = grid.blocks.len();
-    info.liquid_volume = grid.liquid_volume();
-    // 6: viscosity (grid part of eq. 13; the MLS part for C-1/C-2 goes here too)
-    if p.viscosity > 0.0 {
+    // 6: viscosity, grid part of eq. (13); the MLS part for C-1/C-2 joins here
+    info.viscosity = if p.viscosity > 0.0 {
         let v = timed(times, "viscosity", || {
             viscosity(grid, p.viscosity, p.density, dt, p.viscous)
         });
-        info.viscosity = Some(v.map_err(StepError::Viscosity)?);
+        Some(v.map_err(StepError::Viscosity)?)
     } else {
-        times.add("viscosity", 0.0);
-    }
-    // 7: projection (the monolithic tension/coupling solve of §7 takes its place)
-    let proj = timed(
-        times,
-        "projection",
-        || -> Result<ProjectionInfo, NotFinite> {
-            let (pi, mut valid) = project(grid, solids, p.pressure)?;
-            extrapolate(grid, &mut valid, p.margin + 1);
-            constrain_solids(grid, solids);
-            Ok(pi)
-        },
-    );
-    info.pressure = proj.map_err(StepError::Pressure)?;
+        times.add("viscosity", 0.0); // skipped (μ = 0): reported as 0
+        None
+    };
+    // 7: projection; the monolithic tension/coupling solve of §7 takes its place
+    info.pressure = timed(times, "projection", || {
+        project_liquid(grid, solids, p.pressure, p.margin + 1)
+    })
+    .map_err(StepError::Pressure)?;
     // 8: grid → particles
-    timed(times, "g2p", || grid_to_particles(grid, particles, p.flip));
+    timed(times, "g2p", || match p.transfer {
+        Transfer::Flip => grid_to_particles(grid, particles, p.flip),
+        Transfer::Apic => grid_to_particles_apic(grid, particles, affine),
+    });
     debug_check(particles, "g2p")?;
     // 1: advection (first step of the next cycle of Algorithm 1)
     info.advect = timed(times, "advect", || {
         advect(particles, grid, solids, p.lo, p.hi, dt)
     });
+    info.blocks = grid.blocks.len();
+    info.liquid_volume = grid.liquid_volume();
     // 2–3: codimension update (§8) and reseeding (§9) edit `particles` here,
     // through `Particles::retain` / `Particles::push`.
     let bad = count_non_finite(particles);

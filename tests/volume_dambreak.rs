@@ -25,11 +25,8 @@ fn dam_break_keeps_its_volume_after_settling() {
     let (particles, _) = sample_bodies(&scene, &solids);
     let d = &scene.domain;
     let params = StepParams::from_scene(&scene);
-    let mut st = SimState {
-        particles,
-        grid: MacGrid::new(Vec3::from(d.min), Vec3::from(d.max), d.dx),
-        solids,
-    };
+    let grid = MacGrid::new(Vec3::from(d.min), Vec3::from(d.max), d.dx);
+    let mut st = SimState::new(particles, grid, solids);
     let mut times = StageTimes::default();
     let (mut t, t_end) = (0.0, 3.0);
     let mut v0 = None;

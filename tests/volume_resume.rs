@@ -67,6 +67,16 @@ fn resumed_runs_are_byte_identical_to_straight_runs() {
     let last = &m.frames[10];
     assert!(last.viscosity.solves > 0 && last.stage_s["viscosity"] > 0.0);
     assert!(last.pressure.solves == last.substeps && last.pressure.iterations_max > 0);
+    assert_eq!(last.substep_log.len() as u32, last.substeps);
+    let dt_sum: f64 = last.substep_log.iter().map(|s| s.dt).sum();
+    assert!(
+        (dt_sum - 1.0 / 30.0).abs() < 1e-12,
+        "substeps cover the frame: {dt_sum}"
+    );
+    assert!(last
+        .substep_log
+        .iter()
+        .all(|s| s.residual <= 1e-8 && s.iterations > 0));
     // the cache is complete and readable: no temporary files, ids stable
     for e in std::fs::read_dir(b.join("resume")).unwrap() {
         let n = e.unwrap().file_name().to_string_lossy().into_owned();

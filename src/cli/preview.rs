@@ -3,8 +3,10 @@
 //! `DIR/preview/` plus `contact_sheet.png` of evenly spaced frames.
 use anyhow::{bail, ensure, Context, Result};
 use clap::Args;
+use codimfx::io::manifest::Manifest;
 use codimfx::io::ply;
-use codimfx::preview::{render, Camera};
+use codimfx::preview::{render, solid_points, Camera, ImageSize};
+use codimfx::scene::load_str;
 use codimfx::{Real, Vec3};
 use image::{imageops, RgbImage};
 use rayon::prelude::*;
@@ -33,6 +35,9 @@ pub struct PreviewArgs {
     /// Disc radius relative to the cached particle radius.
     #[arg(long, default_value_t = 1.6)]
     splat: Real,
+    /// Do not draw the scene's static solids (grey).
+    #[arg(long)]
+    no_solids: bool,
     /// Output folder (default DIR/preview).
     #[arg(short = 'o', long = "out")]
     out: Option<PathBuf>,
@@ -140,12 +145,40 @@ pub fn run(a: PreviewArgs) -> Result<()> {
             Camera::auto(lo, hi, a.ortho)
         }
     };
+    // static solids from the scene copy in the manifest, when there is one
+    let mpath = a.dir.join("manifest.json");
+    let manifest = if a.no_solids || !mpath.exists() {
+        None
+    } else {
+        match Manifest::read(&mpath) {
+            Ok(m) => Some(m),
+            Err(e) => {
+                eprintln!("note: solids not drawn: {e}");
+                None
+            }
+        }
+    };
+    let (solid_pts, solid_r) = match manifest {
+        Some(m) => {
+            let scene = load_str(&m.scene_yaml, Path::new(&m.scene_file))
+                .with_context(|| format!("scene copy in {}/manifest.json", a.dir.display()))?;
+            let (lo, hi) = (Vec3::from(scene.domain.min), Vec3::from(scene.domain.max));
+            let h = scene.domain.dx * 0.5;
+            (solid_points(&scene.solids, lo, hi, h), 0.6 * h)
+        }
+        _ => (Vec::new(), 0.0),
+    };
     let count: usize = frames
         .par_iter()
         .map(|&f| -> Result<usize> {
             let fr = ply::read(&a.dir.join(ply::frame_name(f)))?;
             let p = &fr.particles;
-            let img = render(&p.x, &p.radius, &p.codim, &cam, a.width, a.height, a.splat);
+            let size = ImageSize {
+                width: a.width,
+                height: a.height,
+                splat: a.splat,
+            };
+            let img = render(&p.x, &p.radius, &p.codim, &cam, &size, &solid_pts, solid_r);
             let path = out.join(format!("frame.{f:04}.png"));
             img.save(&path)
                 .with_context(|| format!("writing {}", path.display()))?;

@@ -56,6 +56,8 @@ pub struct MacGrid {
     pub weight: [Vec<Real>; 3],
     /// Liquid level set at cell centres (m), negative inside the liquid.
     pub phi: Vec<Real>,
+    /// Face-neighbour slots (−x, +x, −y, +y, −z, +z) of every slot, or [`NONE`].
+    pub nbr: Vec<[u32; 6]>,
 }
 
 impl MacGrid {
@@ -114,11 +116,23 @@ impl MacGrid {
         (c[0] as usize) < self.n[0] && (c[1] as usize) < self.n[1] && (c[2] as usize) < self.n[2]
     }
 
-    /// Neighbour slot of `s` shifted by `off` cells.
+    /// Neighbour slot of `s` shifted by `off` cells (face neighbours from the table).
     #[inline]
     pub fn neighbor(&self, s: usize, off: [isize; 3]) -> Option<usize> {
-        let c = self.cell(s);
-        self.slot(c[0] + off[0], c[1] + off[1], c[2] + off[2])
+        let d = match off {
+            [-1, 0, 0] => 0,
+            [1, 0, 0] => 1,
+            [0, -1, 0] => 2,
+            [0, 1, 0] => 3,
+            [0, 0, -1] => 4,
+            [0, 0, 1] => 5,
+            _ => {
+                let c = self.cell(s);
+                return self.slot(c[0] + off[0], c[1] + off[1], c[2] + off[2]);
+            }
+        };
+        let t = self.nbr[s][d];
+        (t != NONE).then_some(t as usize)
     }
 
     /// Position in cell units (cell centres at half-integers).
@@ -174,6 +188,31 @@ impl MacGrid {
         }
         self.phi.clear();
         self.phi.resize(ns, self.dx);
+        let g: &MacGrid = self;
+        let nbr: Vec<[u32; 6]> = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                let c = g.cell(s);
+                let mut n = [NONE; 6];
+                for (d, o) in [
+                    [-1, 0, 0],
+                    [1, 0, 0],
+                    [0, -1, 0],
+                    [0, 1, 0],
+                    [0, 0, -1],
+                    [0, 0, 1],
+                ]
+                .iter()
+                .enumerate()
+                {
+                    if let Some(t) = g.slot(c[0] + o[0], c[1] + o[1], c[2] + o[2]) {
+                        n[d] = t as u32;
+                    }
+                }
+                n
+            })
+            .collect();
+        self.nbr = nbr;
     }
 
     /// World position of the centre of face `a` of slot `s`.
@@ -296,6 +335,32 @@ impl MacGrid {
         (idx, ws)
     }
 
+    /// [`Self::stencil`] with the gradient (1/m) of each trilinear weight, for APIC.
+    #[inline]
+    pub fn stencil_grad(&self, a: usize, x: &Vec3) -> ([u32; 8], [Real; 8], [Vec3; 8]) {
+        let (idx, w) = self.stencil(a, x);
+        let q = self.to_grid(x);
+        let mut f = [q.x - 0.5, q.y - 0.5, q.z - 0.5];
+        f[a] = q[a];
+        // recover the fractional coordinates the stencil used
+        let mut t = [0.0; 3];
+        for d in 0..3 {
+            let n = self.n[d] as Real;
+            let hi = if d == a { n } else { n - 1.0 };
+            let fd = f[d].clamp(0.0, hi);
+            t[d] = fd - fd.floor().min((hi - 1.0).max(0.0));
+        }
+        let inv = 1.0 / self.dx;
+        let mut g = [Vec3::zeros(); 8];
+        for (k, gk) in g.iter_mut().enumerate() {
+            let o = [k & 1, (k >> 1) & 1, (k >> 2) & 1];
+            let h: [Real; 3] = [0, 1, 2].map(|d| if o[d] == 1 { t[d] } else { 1.0 - t[d] });
+            let s: [Real; 3] = [0, 1, 2].map(|d| if o[d] == 1 { inv } else { -inv });
+            *gk = Vec3::new(s[0] * h[1] * h[2], h[0] * s[1] * h[2], h[0] * h[1] * s[2]);
+        }
+        (idx, w, g)
+    }
+
     /// Grid velocity at `x` (m/s).
     #[inline]
     pub fn velocity(&self, x: &Vec3) -> Vec3 {
@@ -384,6 +449,19 @@ mod tests {
             let v = g.sample(&g.u[a], a, &x);
             assert!((v - (1.0 + 2.0 * x.x - x.y + 0.5 * x.z)).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn storage_scales_with_the_liquid_not_the_domain() {
+        // 512³ cells (134M); a 2-cell cluster of points allocates at most 2³ blocks
+        let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.0), 1.0 / 512.0);
+        let pts: Vec<Vec3> = (0..100)
+            .map(|i| Vec3::repeat(0.3) + Vec3::repeat(i as Real * 4e-5))
+            .collect();
+        g.activate(&pts, 2);
+        assert!(g.blocks.len() <= 8, "{} blocks", g.blocks.len());
+        assert!(g.slots() <= 8 * BV && g.u[0].len() == g.slots() && g.phi.len() == g.slots());
+        assert_eq!(g.block_of.len(), 64 * 64 * 64);
     }
 
     #[test]

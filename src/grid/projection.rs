@@ -15,7 +15,7 @@
 //! crossing (p = 0 at the surface, σ = 0). θ is clamped to ≥ 0.01 and the
 //! clamps are counted. Solved by PCG with MIC(0) ([`super::pcg`]).
 
-use super::extrapolate::is_wall_face;
+use super::extrapolate::{constrain_solids, extrapolate, is_wall_face};
 use super::pcg::{pcg, NotFinite, PcgParams, SolveInfo, Stencil7};
 use super::transfer::Valid;
 use super::{MacGrid, NONE};
@@ -192,6 +192,20 @@ pub fn project(
         },
         valid,
     ))
+}
+
+/// Algorithm 1 step 7 as one stage: [`project`], then extend the projected
+/// velocities `layers` layers and apply free slip inside solids.
+pub fn project_liquid(
+    grid: &mut MacGrid,
+    solids: &SolidSet,
+    prm: PcgParams,
+    layers: usize,
+) -> Result<ProjectionInfo, NotFinite> {
+    let (info, mut valid) = project(grid, solids, prm)?;
+    extrapolate(grid, &mut valid, layers);
+    constrain_solids(grid, solids);
+    Ok(info)
 }
 
 /// Offset of `k` cells along axis `a`.

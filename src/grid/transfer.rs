@@ -12,15 +12,19 @@
 //! inside the liquid, where they would let it collapse), whose zero
 //! crossing the ghost-fluid projection uses.
 //!
+//! APIC (Jiang et al. 2015) is the alternative transfer (`solver.transfer`).
+//!
 //! G2P (step 8): `u_p ← α (u_p + Δu_grid(x_p)) + (1 − α) u_grid(x_p)` with α the
 //! FLIP fraction and `Δu_grid = u^{n+1} − u^{P2G}` on the faces; the
 //! increment is sampled with the wall faces replaced by their interior
 //! neighbours ([`MacGrid::stencil_clamped`]), otherwise a particle resting
 //! next to a wall keeps a growing normal velocity that the grid never sees.
 
+use super::extrapolate::extrapolate;
 use super::{MacGrid, NONE};
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
+use crate::solids::SolidSet;
 use rayon::prelude::*;
 
 /// Codimension-0 particles sorted by the slot of the cell that contains them.
@@ -78,12 +82,15 @@ pub fn sort_particles(grid: &MacGrid, parts: &Particles) -> CellSort {
 /// Which faces received particle weight in P2G (1) and which did not (0).
 pub type Valid = [Vec<u8>; 3];
 
-/// Algorithm 1 step 5: particle velocities to the faces, and the liquid level set.
+/// Algorithm 1 step 5: particle velocities to the faces, and the liquid level
+/// set. With `affine` (APIC), particle p contributes `u_p,a + c_p,a · (x_f − x_p)`
+/// to face f of component a instead of `u_p,a`.
 pub fn particles_to_grid(
     grid: &mut MacGrid,
     parts: &Particles,
     sort: &CellSort,
     surface_radius: Real,
+    affine: Option<&[[Vec3; 3]]>,
 ) -> Valid {
     let ns = grid.slots();
     let g: &MacGrid = grid;
@@ -125,7 +132,14 @@ pub fn particles_to_grid(
                             ];
                             for a in 0..3 {
                                 if w[a] > 0.0 {
-                                    num[a] += w[a] * m * parts.v[p][a];
+                                    let mut va = parts.v[p][a];
+                                    if let Some(c) = affine {
+                                        // face a of this slot sits at the corner + ½ on the other axes
+                                        let mut df = Vec3::repeat(0.5) - r;
+                                        df[a] = -r[a];
+                                        va += c[p][a].dot(&df) * g.dx;
+                                    }
+                                    num[a] += w[a] * m * va;
                                     den[a] += w[a] * m;
                                 }
                             }
@@ -193,6 +207,26 @@ pub fn particles_to_grid(
     valid
 }
 
+/// Algorithm 1 step 5 as one stage: allocate the blocks within `margin`
+/// cells of the particles, compute the cut-cell face weights, sort the
+/// particles by cell, gather the face velocities and the level set, extend the
+/// velocities `margin + 1` layers, and keep a copy for the FLIP update.
+pub fn transfer_to_grid(
+    grid: &mut MacGrid,
+    parts: &Particles,
+    solids: &SolidSet,
+    margin: usize,
+    surface_radius: Real,
+    affine: Option<&[[Vec3; 3]]>,
+) {
+    grid.activate(&parts.x, margin);
+    grid.compute_weights(solids);
+    let sort = sort_particles(grid, parts);
+    let mut valid = particles_to_grid(grid, parts, &sort, surface_radius, affine);
+    extrapolate(grid, &mut valid, margin + 1);
+    grid.u_old = grid.u.clone();
+}
+
 /// Algorithm 1 step 8: PIC/FLIP update of the codimension-0 particle velocities.
 pub fn grid_to_particles(grid: &MacGrid, parts: &mut Particles, flip: Real) {
     let delta: [Vec<Real>; 3] = [0, 1, 2].map(|a| {
@@ -234,5 +268,34 @@ pub fn grid_to_particles(grid: &MacGrid, parts: &mut Particles, flip: Real) {
                 }
             }
             *v = (*v + dv) * flip + pic * (1.0 - flip);
+        });
+}
+
+/// Algorithm 1 step 8 with APIC (Jiang, Schroeder, Selle, Teran, Stomakhin
+/// 2015): `u_p,a = Σ_f w_fp u_f` and `c_p,a = Σ_f ∇w_fp u_f`, the affine
+/// velocity that the next P2G carries back to the grid.
+pub fn grid_to_particles_apic(grid: &MacGrid, parts: &mut Particles, affine: &mut [[Vec3; 3]]) {
+    parts
+        .v
+        .par_iter_mut()
+        .zip(affine.par_iter_mut())
+        .zip(parts.x.par_iter().zip(parts.codim.par_iter()))
+        .for_each(|((v, c), (x, cd))| {
+            if *cd != Codim::Volume {
+                return;
+            }
+            for a in 0..3 {
+                let (idx, w, gw) = grid.stencil_grad(a, x);
+                let (mut va, mut ca) = (0.0, Vec3::zeros());
+                for k in 0..8 {
+                    if idx[k] != NONE {
+                        let u = grid.u[a][idx[k] as usize];
+                        va += w[k] * u;
+                        ca += gw[k] * u;
+                    }
+                }
+                v[a] = va;
+                c[a] = ca;
+            }
         });
 }

@@ -40,6 +40,19 @@ impl SolverStats {
     }
 }
 
+/// One substep's length and pressure solve.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct SubstepRecord {
+    /// Substep length (s).
+    pub dt: Real,
+    /// Pressure PCG iterations.
+    pub iterations: u32,
+    /// Final relative residual of the pressure PCG.
+    pub residual: Real,
+    /// Pressure unknowns (liquid cells).
+    pub cells: usize,
+}
+
 /// Particle speed statistics (m/s).
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct Speed {
@@ -99,6 +112,9 @@ pub struct FrameRecord {
     pub blocks: usize,
     /// Counted corrections.
     pub fallbacks: Fallbacks,
+    /// Every substep's length and pressure solve, in order.
+    #[serde(default)]
+    pub substep_log: Vec<SubstepRecord>,
 }
 
 /// The whole manifest.

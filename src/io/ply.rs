@@ -52,11 +52,19 @@ const PROPS: [(&str, &str); 13] = [
     ("double", "nz"),
 ];
 
+/// Names of the optional APIC properties `c{a}{d}` = ∂u_a/∂x_d (1/s),
+/// appended after `nz` in runs with `solver.transfer: apic`.
+pub const AFFINE_PROPS: [&str; 9] = [
+    "c00", "c01", "c02", "c10", "c11", "c12", "c20", "c21", "c22",
+];
+
 /// Encodes one frame. `frame_vec` holds the sheet normal / filament tangent
-/// per particle (zero for C = 0 and C = 3); `None` writes zeros.
+/// per particle (zero for C = 0 and C = 3); `None` writes zeros. `affine`
+/// (APIC runs) appends the nine [`AFFINE_PROPS`].
 pub fn encode(
     p: &Particles,
     frame_vec: Option<&[Vec3]>,
+    affine: Option<&[[Vec3; 3]]>,
     frame: u32,
     time: Real,
 ) -> Result<Vec<u8>, PlyError> {
@@ -80,6 +88,11 @@ pub fn encode(
     for (t, n) in PROPS {
         h.push_str(&format!("property {t} {n}\n"));
     }
+    if affine.is_some() {
+        for n in AFFINE_PROPS {
+            h.push_str(&format!("property double {n}\n"));
+        }
+    }
     h.push_str("end_header\n");
     let mut out = Vec::with_capacity(h.len() + p.len() * 93);
     out.extend_from_slice(h.as_bytes());
@@ -99,6 +112,19 @@ pub fn encode(
         for c in n.iter() {
             out.extend_from_slice(&c.to_le_bytes());
         }
+        if let Some(c) = affine {
+            for row in &c[i] {
+                for e in row.iter() {
+                    if !e.is_finite() {
+                        return Err(PlyError::Value {
+                            index: i,
+                            reason: "non-finite APIC matrix; frame not written".into(),
+                        });
+                    }
+                    out.extend_from_slice(&e.to_le_bytes());
+                }
+            }
+        }
     }
     Ok(out)
 }
@@ -110,6 +136,8 @@ pub struct Frame {
     pub particles: Particles,
     /// Frame vectors `nx ny nz` (zero where absent).
     pub frame_vec: Vec<Vec3>,
+    /// APIC matrices, when the file has the [`AFFINE_PROPS`].
+    pub affine: Option<Vec<[Vec3; 3]>>,
 }
 
 fn size_of(t: &str) -> Option<usize> {
@@ -202,7 +230,9 @@ pub fn decode(bytes: &[u8], path: &str) -> Result<Frame, PlyError> {
     let cv = [need("vx")?, need("vy")?, need("vz")?];
     let (cid, cc, cr, cm) = (need("id")?, need("codim")?, need("pscale")?, need("mass")?);
     let cn = [col("nx"), col("ny"), col("nz")];
+    let ca: Option<Vec<(usize, String)>> = AFFINE_PROPS.iter().map(|n| col(n)).collect();
     let mut f = Frame::default();
+    let mut affine = Vec::new();
     let p = &mut f.particles;
     for i in 0..count {
         let r = &body[i * stride..(i + 1) * stride];
@@ -219,6 +249,12 @@ pub fn decode(bytes: &[u8], path: &str) -> Result<Frame, PlyError> {
         p.id[i] = g(&cid) as u64;
         let n = Vec3::from_fn(|d, _| cn[d].as_ref().map_or(0.0, &g));
         f.frame_vec.push(n);
+        if let Some(ca) = &ca {
+            affine.push([0, 1, 2].map(|a| Vec3::from_fn(|d, _| g(&ca[3 * a + d]))));
+        }
+    }
+    if ca.is_some() {
+        f.affine = Some(affine);
     }
     p.next_id = p.id.iter().max().map_or(0, |m| m + 1);
     Ok(f)
@@ -256,7 +292,7 @@ mod tests {
             );
         }
         p.retain(&[true, true, false, true, true, true, true]);
-        let bytes = encode(&p, None, 3, 0.1).unwrap();
+        let bytes = encode(&p, None, None, 3, 0.1).unwrap();
         let f = decode(&bytes, "mem").unwrap();
         assert_eq!(f.particles.x, p.x);
         assert_eq!(f.particles.v, p.v);
@@ -266,7 +302,7 @@ mod tests {
         assert_eq!(f.particles.radius, p.radius);
         assert_eq!(f.particles.next_id, 7);
         // the bytes re-encode identically
-        assert_eq!(encode(&f.particles, None, 3, 0.1).unwrap(), bytes);
+        assert_eq!(encode(&f.particles, None, None, 3, 0.1).unwrap(), bytes);
         // 13 properties, 93 bytes per particle
         let head = bytes
             .windows(11)
@@ -287,7 +323,7 @@ mod tests {
             Codim::Volume,
         );
         assert!(matches!(
-            encode(&p, None, 1, 0.0),
+            encode(&p, None, None, 1, 0.0),
             Err(PlyError::Value { index: 0, .. })
         ));
     }

@@ -104,7 +104,11 @@ pub struct Physics {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSettings {
-    /// FLIP fraction of the PIC/FLIP blend (0 = PIC, 1 = FLIP).
+    /// Particle–grid transfer: `flip` (PIC/FLIP blend, Zhu & Bridson 2005) or
+    /// `apic` (affine particle-in-cell, Jiang et al. 2015).
+    #[serde(default)]
+    pub transfer: Transfer,
+    /// FLIP fraction of the PIC/FLIP blend (0 = PIC, 1 = FLIP); used when `transfer: flip`.
     #[serde(default = "default_flip")]
     pub flip: f64,
     /// Relative residual (‖r‖₂/‖b‖₂) at which the pressure PCG stops.
@@ -122,6 +126,17 @@ pub struct SolverSettings {
     /// Radius of each particle's sphere in the liquid level set, relative to Δx.
     #[serde(default = "default_surface_radius")]
     pub surface_radius: f64,
+}
+
+/// Particle–grid velocity transfer scheme.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Transfer {
+    /// PIC/FLIP blend with the fraction `solver.flip`.
+    #[default]
+    Flip,
+    /// APIC: each particle carries an affine velocity matrix.
+    Apic,
 }
 
 /// A liquid body at t = 0, sampled into codimension-0 particles (Appendix F).
@@ -279,6 +294,7 @@ impl Default for Physics {
 impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {
+            transfer: Transfer::Flip,
             flip: default_flip(),
             pressure_tolerance: default_tol(),
             pressure_max_iterations: default_iters(),

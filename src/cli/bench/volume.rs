@@ -23,6 +23,9 @@ pub struct VolumeArgs {
     /// Timed substeps.
     #[arg(long, default_value_t = 10)]
     substeps: usize,
+    /// Use the APIC transfer instead of PIC/FLIP.
+    #[arg(long)]
+    apic: bool,
     /// Simulated time (s) before the timed substeps, so the column has started to collapse.
     #[arg(long, default_value_t = 0.25)]
     settle: Real,
@@ -59,17 +62,17 @@ pub fn dam_scene(cells: usize) -> Scene {
 
 /// Runs the benchmark and prints a markdown table.
 pub fn run(a: VolumeArgs) -> Result<()> {
-    let scene = dam_scene(a.cells);
+    let mut scene = dam_scene(a.cells);
+    if a.apic {
+        scene.solver.transfer = codimfx::scene::Transfer::Apic;
+    }
     let solids = SolidSet::from_scene(&scene.solids);
     let (particles, _) = sample_bodies(&scene, &solids);
     let n = particles.len();
     let params = StepParams::from_scene(&scene);
     let d = &scene.domain;
-    let mut st = SimState {
-        particles,
-        grid: MacGrid::new(Vec3::from(d.min), Vec3::from(d.max), d.dx),
-        solids,
-    };
+    let grid = MacGrid::new(Vec3::from(d.min), Vec3::from(d.max), d.dx);
+    let mut st = SimState::new(particles, grid, solids);
     let dtf = |st: &SimState| {
         cfl_dt(
             &st.particles,
@@ -100,8 +103,9 @@ pub fn run(a: VolumeArgs) -> Result<()> {
     let wall = t0.elapsed().as_secs_f64();
     let k = a.substeps.max(1) as Real;
     println!(
-        "threads: {}, particles: {n}, dx = 1/{}, timed after {warm} substeps (t = {t:.3} s), liquid cells: {cells}, blocks: {blocks} ({} cells allocated of {}), mean pressure PCG iterations: {:.1}\n",
+        "threads: {}, transfer: {:?}, particles: {n}, dx = 1/{}, timed after {warm} substeps (t = {t:.3} s), liquid cells: {cells}, blocks: {blocks} ({} cells allocated of {}), mean pressure PCG iterations: {:.1}\n",
         rayon::current_num_threads(),
+        scene.solver.transfer,
         a.cells,
         blocks * 512,
         a.cells.pow(3),
