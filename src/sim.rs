@@ -16,7 +16,9 @@ use crate::io::ply::{self, frame_name, PlyError};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
-use crate::scene::{self, sample_bodies, Scene, SceneError, Transfer};
+use crate::film::driver as film_driver;
+use crate::film::{FilmParams, FilmState};
+use crate::scene::{self, sample_bodies, sample_films, Scene, SceneError, Transfer};
 use crate::solids::SolidSet;
 use crate::step::{cfl_dt, step, SimState, StageTimes, StepError, StepParams};
 use std::path::{Path, PathBuf};
@@ -52,6 +54,16 @@ pub enum SimError {
         time: Real,
         /// The stage error.
         source: StepError,
+    },
+    /// A film step failed even after halving the substep.
+    #[error("frame {frame} (t = {time:.5} s): film step failed: {source}")]
+    Film {
+        /// Frame being computed.
+        frame: u32,
+        /// Simulated time when it failed (s).
+        time: Real,
+        /// The stage error.
+        source: crate::film::FilmError,
     },
     /// Sampling produced no particle at all.
     #[error(
@@ -106,6 +118,8 @@ pub struct Sim {
     pub totals: StageTimes,
     /// Seed samples dropped because they fell inside solids.
     pub dropped_in_solid: usize,
+    /// Film-only scenes: the sheet/filament solver and its state (no grid).
+    pub film: Option<(FilmParams, FilmState)>,
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SimError + '_ {
@@ -214,6 +228,13 @@ impl Sim {
             };
             let mut manifest = manifest;
             manifest.frames.retain(|r| r.frame <= f);
+            let film = scene.bodies.is_empty().then(|| {
+                let mut st = film_driver::initial_state(&scene);
+                if let (Some(g), Some(v0)) = (st.gas.as_mut(), rec.gas_v0) {
+                    g.v0 = v0;
+                }
+                (film_driver::params_from_scene(&scene), st)
+            });
             return Ok(Sim {
                 scene,
                 dir,
@@ -230,9 +251,15 @@ impl Sim {
                 last_frame,
                 totals: StageTimes::default(),
                 dropped_in_solid: 0,
+                film,
             });
         }
-        let (particles, rep) = sample_bodies(&scene, &solids);
+        let film_only = scene.bodies.is_empty();
+        let (particles, rep) = if film_only {
+            (sample_films(&scene), Default::default())
+        } else {
+            sample_bodies(&scene, &solids)
+        };
         if particles.is_empty() {
             return Err(SimError::NoLiquid {
                 file: scene_file.to_path_buf(),
@@ -264,11 +291,15 @@ impl Sim {
             frames_written: 0,
             frames: Vec::new(),
         };
-        let bytes = ply::encode(&particles, None, apic_zeros.as_deref(), 0, 0.0)?;
+        let fv = film_only.then(|| film_driver::frame_vectors(&particles, d.dx));
+        let bytes = ply::encode(&particles, fv.as_deref(), apic_zeros.as_deref(), 0, 0.0)?;
         let p0 = dir.join(frame_name(0));
         write_atomic(&p0, &bytes).map_err(io_err(&p0))?;
         manifest.frames.push(base_record(0, 0.0, &particles));
         manifest.write(&mpath)?;
+        let film = film_only.then(|| {
+            (film_driver::params_from_scene(&scene), film_driver::initial_state(&scene))
+        });
         Ok(Sim {
             scene,
             dir,
@@ -280,6 +311,7 @@ impl Sim {
             last_frame,
             totals: StageTimes::default(),
             dropped_in_solid: rep.dropped_in_solid,
+            film,
         })
     }
 
@@ -293,56 +325,75 @@ impl Sim {
         let (mut dt_min, mut dt_max) = (Real::INFINITY, 0.0 as Real);
         let mut substeps = 0;
         let dx = self.scene.domain.dx;
-        while self.time < t_end {
-            let rem = t_end - self.time;
-            let mut dt = cfl_dt(
-                &self.state.particles,
-                dx,
-                self.params.accel,
-                self.scene.time.cfl,
-                self.scene.time.max_dt,
-            );
-            let last = dt >= rem;
-            if last {
-                dt = rem;
-            } else if dt > 0.5 * rem {
-                dt = 0.5 * rem;
-            }
-            let info = step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
-                SimError::Step {
-                    frame: f,
-                    time: self.time,
-                    source,
+        if let Some((prm, st)) = self.film.as_mut() {
+            let (n, lo, hi) = film_driver::advance(
+                &mut self.state.particles,
+                st,
+                prm,
+                &self.scene,
+                self.time,
+                t_end,
+                &mut rec,
+                &mut times,
+            )
+            .map_err(|source| SimError::Film { frame: f, time: self.time, source })?;
+            self.time = t_end;
+            substeps = n;
+            dt_min = lo;
+            dt_max = hi;
+        } else {
+            while self.time < t_end {
+                let rem = t_end - self.time;
+                let mut dt = cfl_dt(
+                    &self.state.particles,
+                    dx,
+                    self.params.accel,
+                    self.scene.time.cfl,
+                    self.scene.time.max_dt,
+                );
+                let last = dt >= rem;
+                if last {
+                    dt = rem;
+                } else if dt > 0.5 * rem {
+                    dt = 0.5 * rem;
                 }
-            })?;
-            self.time = if last { t_end } else { self.time + dt };
-            substeps += 1;
-            dt_min = dt_min.min(dt);
-            dt_max = dt_max.max(dt);
-            let s = &info.pressure.solve;
-            rec.pressure.add(s.iterations, s.rel_residual, s.converged);
-            rec.substep_log.push(SubstepRecord {
-                dt,
-                iterations: s.iterations,
-                residual: s.rel_residual,
-                cells: info.pressure.cells,
-            });
-            if let Some(v) = info.viscosity {
-                for s in v {
-                    rec.viscosity.add(s.iterations, s.rel_residual, s.converged);
+                let info = step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
+                    SimError::Step {
+                        frame: f,
+                        time: self.time,
+                        source,
+                    }
+                })?;
+                self.time = if last { t_end } else { self.time + dt };
+                substeps += 1;
+                dt_min = dt_min.min(dt);
+                dt_max = dt_max.max(dt);
+                let s = &info.pressure.solve;
+                rec.pressure.add(s.iterations, s.rel_residual, s.converged);
+                rec.substep_log.push(SubstepRecord {
+                    dt,
+                    iterations: s.iterations,
+                    residual: s.rel_residual,
+                    cells: info.pressure.cells,
+                });
+                if let Some(v) = info.viscosity {
+                    for s in v {
+                        rec.viscosity.add(s.iterations, s.rel_residual, s.converged);
+                    }
                 }
+                rec.fallbacks.solid_pushouts += info.advect.solid_pushouts as u64;
+                rec.fallbacks.wall_clamps += info.advect.wall_clamps as u64;
+                rec.fallbacks.theta_clamps += info.pressure.theta_clamps as u64;
+                rec.liquid_volume = info.liquid_volume;
+                rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
+                rec.blocks = rec.blocks.max(info.blocks);
             }
-            rec.fallbacks.solid_pushouts += info.advect.solid_pushouts as u64;
-            rec.fallbacks.wall_clamps += info.advect.wall_clamps as u64;
-            rec.fallbacks.theta_clamps += info.pressure.theta_clamps as u64;
-            rec.liquid_volume = info.liquid_volume;
-            rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
-            rec.blocks = rec.blocks.max(info.blocks);
         }
         let p = &self.state.particles;
         let affine =
             (self.params.transfer == Transfer::Apic).then_some(self.state.affine.as_slice());
-        let bytes = ply::encode(p, None, affine, f, self.time)?;
+        let fv = self.film.as_ref().map(|_| film_driver::frame_vectors(p, self.scene.domain.dx));
+        let bytes = ply::encode(p, fv.as_deref(), affine, f, self.time)?;
         let path = self.dir.join(frame_name(f));
         write_atomic(&path, &bytes).map_err(io_err(&path))?;
         let base = base_record(f, self.time, p);

@@ -9,6 +9,7 @@
 
 pub mod catenoid;
 pub mod deformation;
+pub mod driver;
 pub mod step;
 
 use crate::gas::GasPocket;

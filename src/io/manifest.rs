@@ -73,6 +73,12 @@ pub struct Fallbacks {
     pub wall_clamps: u64,
     /// Free-surface faces whose ghost-fluid θ was clamped.
     pub theta_clamps: u64,
+    /// Film particles whose speed was limited to `film.max_speed`.
+    #[serde(default)]
+    pub speed_clamps: u64,
+    /// Film substeps retried at half length after a failed solve.
+    #[serde(default)]
+    pub step_halvings: u64,
 }
 
 /// One frame's record.
@@ -115,6 +121,18 @@ pub struct FrameRecord {
     /// Every substep's length and pressure solve, in order.
     #[serde(default)]
     pub substep_log: Vec<SubstepRecord>,
+    /// Film surface-tension solves (BiCGSTAB + ILU(0)), all components.
+    #[serde(default)]
+    pub tension: SolverStats,
+    /// Codimension transitions during the frame (§8).
+    #[serde(default)]
+    pub transitions: crate::transition::TransitionCounts,
+    /// Reseeding during the frame (§9).
+    #[serde(default)]
+    pub reseed: crate::reseed::ReseedCounts,
+    /// Rest volume of the film's gas pocket (m³), needed to resume.
+    #[serde(default)]
+    pub gas_v0: Option<Real>,
 }
 
 /// The whole manifest.

@@ -93,6 +93,12 @@ pub fn encode(
             h.push_str(&format!("property double {n}\n"));
         }
     }
+    // static boundary particles (film rings) exist: write the flag so a
+    // resumed run keeps them fixed
+    let with_fixed = p.fixed.iter().any(|f| *f);
+    if with_fixed {
+        h.push_str("property uchar fixed\n");
+    }
     h.push_str("end_header\n");
     let mut out = Vec::with_capacity(h.len() + p.len() * 93);
     out.extend_from_slice(h.as_bytes());
@@ -125,6 +131,9 @@ pub fn encode(
                 }
             }
         }
+        if with_fixed {
+            out.push(u8::from(p.fixed[i]));
+        }
     }
     Ok(out)
 }
@@ -132,7 +141,7 @@ pub fn encode(
 /// A decoded cache frame.
 #[derive(Clone, Debug, Default)]
 pub struct Frame {
-    /// Particles (the `fixed` flag is not cached and reads false; `next_id` is max id + 1).
+    /// Particles (`fixed` from the optional `fixed` property, else false; `next_id` is max id + 1).
     pub particles: Particles,
     /// Frame vectors `nx ny nz` (zero where absent).
     pub frame_vec: Vec<Vec3>,
@@ -231,6 +240,7 @@ pub fn decode(bytes: &[u8], path: &str) -> Result<Frame, PlyError> {
     let (cid, cc, cr, cm) = (need("id")?, need("codim")?, need("pscale")?, need("mass")?);
     let cn = [col("nx"), col("ny"), col("nz")];
     let ca: Option<Vec<(usize, String)>> = AFFINE_PROPS.iter().map(|n| col(n)).collect();
+    let cfix = col("fixed");
     let mut f = Frame::default();
     let mut affine = Vec::new();
     let p = &mut f.particles;
@@ -247,6 +257,7 @@ pub fn decode(bytes: &[u8], path: &str) -> Result<Frame, PlyError> {
             codim,
         );
         p.id[i] = g(&cid) as u64;
+        p.fixed[i] = cfix.as_ref().is_some_and(|c| g(c) != 0.0);
         let n = Vec3::from_fn(|d, _| cn[d].as_ref().map_or(0.0, &g));
         f.frame_vec.push(n);
         if let Some(ca) = &ca {

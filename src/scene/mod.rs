@@ -13,10 +13,12 @@
 //! wind, transitions and reseeding get their own top-level sections when their
 //! stages exist.
 
+mod films;
 mod load;
 mod sample;
 mod validate;
 
+pub use films::{sample_films, FilmBody, FilmSettings, WindSettings};
 pub use load::{load, load_str, SceneError};
 pub use sample::{sample_bodies, SampleReport};
 
@@ -42,7 +44,15 @@ pub struct Scene {
     #[serde(default)]
     pub solver: SolverSettings,
     /// Liquid bodies present at t = 0.
+    #[serde(default)]
     pub bodies: Vec<FluidBody>,
+    /// Thin films present at t = 0 (sheet particles, rings). A scene with
+    /// films and no liquid body runs without a grid.
+    #[serde(default)]
+    pub films: Vec<FilmBody>,
+    /// Settings of the sheet/filament solver.
+    #[serde(default)]
+    pub film: FilmSettings,
     /// Static solids (the domain box is always a closed container as well).
     #[serde(default)]
     pub solids: Vec<Solid>,

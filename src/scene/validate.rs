@@ -229,11 +229,11 @@ pub fn validate(s: &Scene) -> Check {
             format!("must be >= 0 Pa·s, got {}", ph.viscosity),
         );
     }
-    if ph.surface_tension != 0.0 {
+    if ph.surface_tension != 0.0 && !s.bodies.is_empty() {
         return fail(
             "physics.surface_tension",
             format!(
-                "sigma = {} N/m needs the MLS surface-tension stage (paper §6), which this build does not have; use 0",
+                "sigma = {} N/m on a liquid volume needs the monolithic coupling of paper §7, which this build does not have (films alone may have surface tension); use 0",
                 ph.surface_tension
             ),
         );
@@ -267,9 +267,10 @@ pub fn validate(s: &Scene) -> Check {
             ),
         );
     }
-    if s.bodies.is_empty() {
-        return fail("bodies", "the scene has no liquid body");
+    if s.bodies.is_empty() && s.films.is_empty() {
+        return fail("bodies", "the scene has no liquid body and no film");
     }
+    super::films::validate(s)?;
     for (i, b) in s.bodies.iter().enumerate() {
         check_body(i, b, s)?;
     }

@@ -56,6 +56,8 @@ pub fn dam_scene(cells: usize) -> Scene {
             spacing: 1.0 / 3.0,
         }],
         solids: vec![],
+        films: vec![],
+        film: Default::default(),
         output: Output::default(),
     }
 }

@@ -1,0 +1,162 @@
+//! Runs film-only scenes inside the frame loop of [`crate::sim`]: parameters
+//! from the scene, CFL substepping (motion per substep limited to
+//! `film.cfl` particle spacings), the counted speed-limit fallback, and the
+//! per-frame record (stage times, solver figures, transition and reseeding
+//! counts). No grid is allocated and the grid stages report 0 s.
+
+use super::step::step_with_retry;
+use super::{FilmError, FilmParams, FilmState, Wind};
+use crate::gas::GasPocket;
+use crate::io::manifest::FrameRecord;
+use crate::linsolve::BicgstabParams;
+use crate::math::{Real, Vec3};
+use crate::mls::operators::{par_frames, Neighborhoods};
+use crate::mls::MlsParams;
+use crate::particles::{Codim, Particles};
+use crate::scene::{FilmBody, Scene};
+use crate::step::StageTimes;
+
+/// Film solver parameters of a validated scene (h = Δx).
+pub fn params_from_scene(s: &Scene) -> FilmParams {
+    let h = s.domain.dx;
+    let f = &s.film;
+    let mut prm = FilmParams::new(h, s.physics.surface_tension);
+    prm.mls = MlsParams { order: f.order, ..prm.mls };
+    prm.density = s.physics.density;
+    prm.viscosity = s.physics.viscosity;
+    let a = s.acceleration();
+    prm.gravity = Vec3::new(a[0], a[1], a[2]);
+    prm.damping = f.damping;
+    prm.wind = f.wind.as_ref().map(|w| Wind {
+        velocity: Vec3::from(w.velocity),
+        air_density: w.air_density,
+        drag: w.drag,
+    });
+    if !f.transitions {
+        prm.transitions = None;
+    }
+    if !f.reseed {
+        prm.reseed = None;
+    }
+    prm.solver = BicgstabParams { tol: f.solver_tolerance, max_iter: f.solver_max_iterations };
+    prm
+}
+
+/// Initial film state: a soft gas pocket balanced for the first spherical
+/// film when `film.gas` is set (rest volume measured on the first step).
+pub fn initial_state(s: &Scene) -> FilmState {
+    let gas = s.film.gas.then(|| {
+        let r = s
+            .films
+            .iter()
+            .find_map(|b| match b {
+                FilmBody::Sphere { radius, .. } => Some(*radius),
+                _ => None,
+            })
+            .unwrap_or(s.domain.dx);
+        GasPocket { v0: 0.0, ..GasPocket::balanced_sphere(r, s.physics.surface_tension, 0.0) }
+    });
+    FilmState { gas }
+}
+
+/// Smallest film particle spacing of the scene (m).
+pub fn spacing(s: &Scene) -> Real {
+    s.films
+        .iter()
+        .map(|b| match b {
+            FilmBody::Sphere { spacing, .. } | FilmBody::Cylinder { spacing, .. } | FilmBody::Disk { spacing, .. } => *spacing,
+        })
+        .fold(1.0, Real::min)
+        * s.domain.dx
+}
+
+/// Cache frame vectors: b³ (normal) of sheet particles, b¹ (tangent) of
+/// filament particles, zero for the others.
+pub fn frame_vectors(p: &Particles, h: Real) -> Vec<Vec3> {
+    let mut out = vec![Vec3::zeros(); p.len()];
+    let Ok(nb) = Neighborhoods::build(&p.x, &p.codim, h) else { return out };
+    let frames = par_frames(&nb, &MlsParams::new(h));
+    for (j, &i) in nb.store.iter().enumerate() {
+        out[i] = if p.codim[i] == Codim::Sheet { frames[j].axis(2) } else { frames[j].axis(0) };
+    }
+    out
+}
+
+/// Advances the film from `t` to `t_end`, filling the frame record. Returns
+/// the number of substeps and the step range (min, max).
+pub fn advance(
+    p: &mut Particles,
+    st: &mut FilmState,
+    prm: &FilmParams,
+    s: &Scene,
+    mut t: Real,
+    t_end: Real,
+    rec: &mut FrameRecord,
+    times: &mut StageTimes,
+) -> Result<(u32, Real, Real), FilmError> {
+    let sp = spacing(s);
+    let (mut n, mut dmin, mut dmax) = (0u32, Real::INFINITY, 0.0 as Real);
+    while t < t_end {
+        let rem = t_end - t;
+        let vmax = p.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+        let mut dt = s.time.max_dt;
+        if vmax > 0.0 {
+            dt = dt.min(s.film.cfl * sp / vmax);
+        }
+        let last = dt >= rem;
+        if last {
+            dt = rem;
+        } else if dt > 0.5 * rem {
+            dt = 0.5 * rem;
+        }
+        let (info, halvings) = step_with_retry(p, st, prm, dt, 4)?;
+        t = if last { t_end } else { t + dt };
+        n += 1;
+        dmin = dmin.min(dt);
+        dmax = dmax.max(dt);
+        let tm = &info.timings;
+        for (k, v) in [
+            ("advect", tm.advect),
+            ("transition", tm.transition),
+            ("reseed", tm.reseed),
+            ("film_forces", tm.forces),
+            ("film_viscosity", tm.viscosity),
+            ("mls_operators", tm.operators),
+            ("tension", tm.tension),
+        ] {
+            times.add(k, v);
+        }
+        for si in &info.tension_solve {
+            rec.tension.add(si.iterations as u32, si.rel_residual, si.rel_residual <= 10.0 * prm.solver.tol);
+        }
+        for si in &info.viscosity_solve {
+            if si.iterations > 0 {
+                rec.viscosity.add(si.iterations as u32, si.rel_residual, true);
+            }
+        }
+        let (a, b) = (&mut rec.transitions, &info.transitions);
+        a.volume_to_sheet += b.volume_to_sheet;
+        a.sheet_to_volume += b.sheet_to_volume;
+        a.sheet_to_filament += b.sheet_to_filament;
+        a.filament_to_point += b.filament_to_point;
+        let (a, b) = (&mut rec.reseed, &info.reseed);
+        a.sheet_inserted += b.sheet_inserted;
+        a.sheet_removed += b.sheet_removed;
+        a.filament_inserted += b.filament_inserted;
+        a.filament_removed += b.filament_removed;
+        a.absorbed += b.absorbed;
+        a.light_merged += b.light_merged;
+        rec.fallbacks.step_halvings += halvings as u64;
+        if s.film.max_speed > 0.0 {
+            for v in p.v.iter_mut() {
+                let m = v.norm();
+                if m > s.film.max_speed {
+                    *v *= s.film.max_speed / m;
+                    rec.fallbacks.speed_clamps += 1;
+                }
+            }
+        }
+    }
+    rec.gas_v0 = st.gas.map(|g| g.v0);
+    Ok((n, dmin, dmax))
+}
