@@ -4,6 +4,7 @@
 //! using Moving-Least-Squares Particles*, ACM TOG 39(4), 2020. See
 //! `docs/architecture.md` for the module map and the data flow of a step.
 
+pub mod linsolve;
 pub mod math;
 pub mod mls;
 pub mod neighbors;

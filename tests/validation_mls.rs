@@ -88,7 +88,14 @@ fn crank_nicolson_agrees_with_the_krylov_exponential_and_operator_is_stable() {
     let l = JointLaplacian::assemble(&nb, &MlsParams::new(h)).unwrap();
     let s0: Vec<f64> = nb.x.iter().map(|p| p.z).collect();
     let (ex, _) = krylov_exp_poly(&l, &s0, 0.5, 1e-10, 40).unwrap();
-    let cn = crank_nicolson(&l, &s0, 0.5, 2.5e-3).unwrap();
+    let cn = crank_nicolson(&l, &s0, 0.5, 2.5e-3, LinearSolver::SparseLu).unwrap();
+    let cn_it = crank_nicolson(&l, &s0, 0.5, 2.5e-3, LinearSolver::Bicgstab).unwrap();
+    let di = cn
+        .iter()
+        .zip(&cn_it)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(di < 1e-9, "CN with LU vs BiCGSTAB {di}");
     let d = ex
         .iter()
         .zip(&cn)

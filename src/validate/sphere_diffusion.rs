@@ -17,7 +17,7 @@
 use super::sampling::{sphere_latitude, sphere_spacing_for};
 use super::time::{
     backward_euler, crank_nicolson, forward_euler, krylov_exp_poly, rightmost_eigenvalue,
-    rightmost_ritz, ShiftedLu,
+    rightmost_ritz, LinearSolver, ShiftedLu,
 };
 use super::{max_abs, observed_orders, ValidateError};
 use crate::math::Real;
@@ -71,6 +71,8 @@ pub struct SphereDiffusion {
     pub mls: MlsParams,
     /// How to estimate the rightmost eigenvalue.
     pub eigen: EigenMethod,
+    /// Linear solver of the implicit schemes.
+    pub solver: LinearSolver,
 }
 
 impl Default for SphereDiffusion {
@@ -85,6 +87,7 @@ impl Default for SphereDiffusion {
             scheme: Scheme::Exact,
             mls: MlsParams::new(0.1),
             eigen: EigenMethod::Ritz,
+            solver: LinearSolver::Bicgstab,
         }
     }
 }
@@ -167,8 +170,8 @@ impl SphereDiffusion {
         let (scheme_sol, dt) = match self.scheme {
             Scheme::Exact => (accurate.clone(), 0.0),
             Scheme::ForwardEuler => (forward_euler(&l, &s0, t, self.dt)?, self.dt),
-            Scheme::BackwardEuler => (backward_euler(&l, &s0, t, self.dt)?, self.dt),
-            Scheme::CrankNicolson => (crank_nicolson(&l, &s0, t, self.dt)?, self.dt),
+            Scheme::BackwardEuler => (backward_euler(&l, &s0, t, self.dt, self.solver)?, self.dt),
+            Scheme::CrankNicolson => (crank_nicolson(&l, &s0, t, self.dt, self.solver)?, self.dt),
         };
         let n = s0.len() as Real;
         // a blown-up (non-finite) solution reports infinite errors, never NaN
