@@ -8,7 +8,7 @@ use codimfx::validate::curvature::{curvature_study, CurvatureShape};
 use codimfx::validate::sampling::{sphere_latitude, sphere_spacing_for};
 use codimfx::validate::sphere_diffusion::{convergence, EigenMethod, Scheme, SphereDiffusion};
 use codimfx::validate::time::{
-    crank_nicolson, krylov_exp_poly, rightmost_eigenvalue, rightmost_ritz, ShiftedLu,
+    crank_nicolson, krylov_exp_poly, rightmost_eigenvalue, rightmost_ritz, LinearSolver, ShiftedLu,
 };
 
 /// h/Δ of the paper's default case (h = 0.1, 29,900 particles).
