@@ -24,13 +24,11 @@ impl Ilu0 {
         let col = a.symbolic().col_idx().to_vec();
         let mut val = a.val().to_vec();
         let mut diag = vec![usize::MAX; n];
-        for i in 0..n {
-            for k in row_ptr[i]..row_ptr[i + 1] {
-                if col[k] == i {
-                    diag[i] = k;
-                }
+        for (i, d) in diag.iter_mut().enumerate() {
+            if let Some(k) = (row_ptr[i]..row_ptr[i + 1]).find(|&k| col[k] == i) {
+                *d = k;
             }
-            if diag[i] == usize::MAX {
+            if *d == usize::MAX {
                 return Err(LinsolveError::Pivot { row: i, value: 0.0 });
             }
         }

@@ -122,8 +122,8 @@ pub enum LinearSolver {
 /// A reusable solver for (I − γL) x = b.
 pub enum ShiftedSolver {
     /// Direct.
-    Lu(ShiftedLu),
-    /// Iterative: the matrix I − γL and its ILU(0).
+    Lu(Box<ShiftedLu>),
+    /// Iterative: the matrix I − γL and its Jacobi preconditioner.
     Iterative {
         /// I − γL in CSR.
         a: faer::sparse::SparseRowMat<usize, Real>,
@@ -142,7 +142,7 @@ impl ShiftedSolver {
         kind: LinearSolver,
     ) -> Result<ShiftedSolver, TimeError> {
         Ok(match kind {
-            LinearSolver::SparseLu => ShiftedSolver::Lu(ShiftedLu::new(l, gamma)?),
+            LinearSolver::SparseLu => ShiftedSolver::Lu(Box::new(ShiftedLu::new(l, gamma)?)),
             LinearSolver::Bicgstab => {
                 let a = crate::linsolve::identity_plus(&l.matrix, 1.0, -gamma);
                 let pre = crate::linsolve::Jacobi::new(&a);
