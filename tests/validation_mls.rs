@@ -186,3 +186,41 @@ fn butterfly_joint_diffusion_is_stable_and_spreads() {
         r.fit_stats
     );
 }
+
+/// Regression: one-sided MLS rows at open filament ends (butterfly tails) and at
+/// free sheet edges made L unstable (rightmost eigenvalue +18 … +203); the
+/// boundary rows keep every eigenvalue in the left half plane.
+#[test]
+fn regression_open_ends_and_free_sheet_edges_are_stable() {
+    use codimfx::validate::butterfly::butterfly_particles;
+    use codimfx::Codim;
+    let sp = 0.05;
+    let (x, c) = butterfly_particles(sp);
+    let sheet: Vec<_> = x
+        .iter()
+        .zip(&c)
+        .filter(|(_, c)| **c == Codim::Sheet)
+        .map(|(p, _)| *p)
+        .collect();
+    for order in [2, 4] {
+        let params = MlsParams {
+            order,
+            ..MlsParams::new(3.5 * sp)
+        };
+        for (pts, codims) in [
+            (x.clone(), c.clone()),
+            (sheet.clone(), vec![Codim::Sheet; sheet.len()]),
+        ] {
+            let nb = Neighborhoods::build(&pts, &codims, params.h).unwrap();
+            let l = JointLaplacian::assemble(&nb, &params).unwrap();
+            assert!(l.stats.boundary > 0);
+            let lu = ShiftedLu::new(&l, 0.01).unwrap();
+            let (re, _) = rightmost_eigenvalue(&lu, l.n(), 60, 3);
+            assert!(
+                re < 1e-4,
+                "order {order}, {} particles: rightmost {re}",
+                l.n()
+            );
+        }
+    }
+}
