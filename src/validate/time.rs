@@ -440,7 +440,8 @@ pub fn krylov_exp_poly(
 /// Rightmost converged Ritz value of L: `m` Arnoldi steps on L from a
 /// deterministic random start; a Ritz pair (θ, y) counts as converged when
 /// its residual |h_{m+1,m} y_m| / ‖y‖ ≤ `rel_tol` · max |θ|. Returns
-/// (re, im, residual) of the one with the largest real part, and the
+/// (re, im, residual) of the one with the largest real part (of all Ritz
+/// values when none converged), and the
 /// largest |θ| (a lower estimate of the spectral radius ρ, which bounds the
 /// forward-Euler step: Δt < 2/ρ for a real negative spectrum).
 pub fn rightmost_ritz(
@@ -470,6 +471,9 @@ pub fn rightmost_ritz(
         .max(1e-300);
     let hc: DMatrix<Complex<Real>> = hk.map(|x| Complex::new(x, 0.0));
     let mut best = (Real::NEG_INFINITY, 0.0, Real::INFINITY);
+    // fallback when no Ritz pair converged: the rightmost Ritz value of all
+    // (Ritz values lie in the field of values, so this errs towards "unstable")
+    let mut any = (Real::NEG_INFINITY, 0.0, Real::INFINITY);
     for th in &thetas {
         // inverse iteration on the small matrix for the Ritz vector
         let shift = *th + Complex::new(1e-10 * scale, 0.0);
@@ -494,6 +498,12 @@ pub fn rightmost_ritz(
         if res <= rel_tol * scale && th.re > best.0 {
             best = (th.re, th.im, res);
         }
+        if th.re > any.0 {
+            any = (th.re, th.im, res);
+        }
+    }
+    if !best.0.is_finite() {
+        best = any;
     }
     (best.0, best.1, best.2, scale)
 }
