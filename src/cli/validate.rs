@@ -122,9 +122,10 @@ struct SphereArgs {
     /// or `lu` (faer sparse LU, factorised once; ~9 s for 30k particles).
     #[arg(long, value_enum, default_value_t = SolverArg::Bicgstab)]
     solver: SolverArg,
-    /// Rightmost-eigenvalue estimate: `ritz` (Arnoldi on L, fast),
-    /// `shift-invert` (Arnoldi on (I − 0.01 L)⁻¹, sparse LU, slow) or `none`.
-    #[arg(long, value_enum, default_value_t = EigenArg::Ritz)]
+    /// Rightmost-eigenvalue estimate: `shift-invert` (45 Arnoldi steps on
+    /// (I − 0.002 L)⁻¹, solves by --solver), `ritz` (converged Ritz values of
+    /// L: fast, can miss unstable modes; also gives the spectral radius) or `none`.
+    #[arg(long, value_enum, default_value_t = EigenArg::ShiftInvert)]
     eigen: EigenArg,
     /// Convergence mode: run these particle counts (comma separated, ≥ 3)
     /// with h scaled to keep h/Δ as in the default case, and print the observed order.

@@ -32,6 +32,7 @@ use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::MatMut;
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 use thiserror::Error;
 
 /// Errors of the validation integrators.
@@ -131,15 +132,28 @@ pub enum ShiftedSolver {
         pre: crate::linsolve::Jacobi,
         /// Total BiCGSTAB iterations so far.
         iterations: std::cell::Cell<usize>,
+        /// Relative residual tolerance.
+        tol: Real,
     },
 }
 
 impl ShiftedSolver {
-    /// Prepares the solver for shift γ.
+    /// Prepares the solver for shift γ (iterative tolerance 1e-12).
     pub fn new(
         l: &JointLaplacian,
         gamma: Real,
         kind: LinearSolver,
+    ) -> Result<ShiftedSolver, TimeError> {
+        ShiftedSolver::with_tol(l, gamma, kind, 1e-12)
+    }
+
+    /// Prepares the solver for shift γ with relative residual tolerance `tol`
+    /// for the iterative solver.
+    pub fn with_tol(
+        l: &JointLaplacian,
+        gamma: Real,
+        kind: LinearSolver,
+        tol: Real,
     ) -> Result<ShiftedSolver, TimeError> {
         Ok(match kind {
             LinearSolver::SparseLu => ShiftedSolver::Lu(Box::new(ShiftedLu::new(l, gamma)?)),
@@ -150,6 +164,7 @@ impl ShiftedSolver {
                     a,
                     pre,
                     iterations: std::cell::Cell::new(0),
+                    tol,
                 }
             }
         })
@@ -159,10 +174,15 @@ impl ShiftedSolver {
     pub fn solve(&self, b: &mut [Real]) -> Result<(), TimeError> {
         match self {
             ShiftedSolver::Lu(lu) => lu.solve(b),
-            ShiftedSolver::Iterative { a, pre, iterations } => {
+            ShiftedSolver::Iterative {
+                a,
+                pre,
+                iterations,
+                tol,
+            } => {
                 let rhs = b.to_vec();
                 let p = crate::linsolve::BicgstabParams {
-                    tol: 1e-12,
+                    tol: *tol,
                     max_iters: 1000,
                 };
                 let info = crate::linsolve::bicgstab(a, &rhs, b, pre, &p)?;
@@ -274,12 +294,24 @@ fn arnoldi(
     for j in 0..m {
         let mut w = v[j].clone();
         apply(&mut w);
+        // classical Gram–Schmidt, twice (CGS2): the projections are independent
+        // dot products (parallel over basis vectors), the update a fixed-order
+        // sum per entry (parallel over entries) — deterministic
         for _pass in 0..2 {
-            for (i, vi) in v.iter().enumerate() {
-                let c = dot(&w, vi);
-                h[(i, j)] += c;
-                w.iter_mut().zip(vi).for_each(|(a, b)| *a -= c * b);
+            let c: Vec<Real> = v.par_iter().map(|vi| dot(&w, vi)).collect();
+            for (i, ci) in c.iter().enumerate() {
+                h[(i, j)] += ci;
             }
+            w.par_chunks_mut(2048).enumerate().for_each(|(b, chunk)| {
+                let off = b * 2048;
+                let len = chunk.len();
+                for (i, vi) in v.iter().enumerate() {
+                    let ci = c[i];
+                    for (a, x) in chunk.iter_mut().zip(&vi[off..off + len]) {
+                        *a -= ci * x;
+                    }
+                }
+            });
         }
         let nw = dot(&w, &w).sqrt();
         h[(j + 1, j)] = nw;
@@ -348,22 +380,48 @@ pub fn krylov_exp(
 }
 
 /// Estimate of the rightmost eigenvalue (re, im) of L: `m` Arnoldi steps on
-/// (I − τL)⁻¹ from a deterministic random start; the Ritz value with the
-/// largest real part of λ = (1 − 1/μ)/τ among the well-converged ones
-/// (the dominant half by |μ|).
+/// (I − τL)⁻¹ (applied by the LU) from a deterministic random start; the
+/// Ritz value with the largest real part of λ = (1 − 1/μ)/τ among the
+/// dominant half by |μ|.
 pub fn rightmost_eigenvalue(lu: &ShiftedLu, n: usize, m: usize, seed: u64) -> (Real, Real) {
+    rightmost_shift_invert(n, lu.gamma, m, seed, |w| {
+        lu.solve(w);
+        Ok(())
+    })
+    .expect("a direct solve cannot fail")
+}
+
+/// As [`rightmost_eigenvalue`] with any solver of (I − τL) x = b
+/// (e.g. [`ShiftedSolver`] with BiCGSTAB).
+pub fn rightmost_shift_invert(
+    n: usize,
+    tau: Real,
+    m: usize,
+    seed: u64,
+    mut solve: impl FnMut(&mut [Real]) -> Result<(), TimeError>,
+) -> Result<(Real, Real), TimeError> {
     let mut s = seed;
     let v0: Vec<Real> = (0..n)
         .map(|_| super::sampling::rand01(&mut s) - 0.5)
         .collect();
-    let (_, h) = arnoldi(&v0, m, |w| lu.solve(w));
+    let mut err = None;
+    let (_, h) = arnoldi(&v0, m, |w| {
+        if err.is_none() {
+            if let Err(e) = solve(w) {
+                err = Some(e);
+            }
+        }
+    });
+    if let Some(e) = err {
+        return Err(e);
+    }
     let k = h.ncols();
     let hm = h.view((0, 0), (k, k)).into_owned();
     let mut mus: Vec<nalgebra::Complex<Real>> = hm.complex_eigenvalues().iter().copied().collect();
     mus.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
     let keep = (mus.len() / 2).max(1);
-    let tau = lu.gamma;
-    mus.iter()
+    Ok(mus
+        .iter()
         .take(keep)
         .filter(|mu| mu.norm() > 1e-12)
         .map(|mu| {
@@ -373,7 +431,7 @@ pub fn rightmost_eigenvalue(lu: &ShiftedLu, n: usize, m: usize, seed: u64) -> (R
         .fold(
             (Real::NEG_INFINITY, 0.0),
             |a, b| if b.0 > a.0 { b } else { a },
-        )
+        ))
 }
 
 /// exp(tL) s₀ by polynomial Krylov with sub-steps (module docs). Returns the
