@@ -83,3 +83,45 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 pub fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
+
+/// The CSR matrix α I + β A (A square, columns sorted per row); the
+/// diagonal is inserted where A does not store it.
+pub fn identity_plus(
+    a: &faer::sparse::SparseRowMat<usize, f64>,
+    alpha: f64,
+    beta: f64,
+) -> faer::sparse::SparseRowMat<usize, f64> {
+    let n = a.nrows();
+    let rp = a.symbolic().row_ptr();
+    let ci = a.symbolic().col_idx();
+    let v = a.val();
+    let mut row_ptr = Vec::with_capacity(n + 1);
+    let mut col = Vec::with_capacity(v.len() + n);
+    let mut val = Vec::with_capacity(v.len() + n);
+    row_ptr.push(0);
+    for i in 0..n {
+        let mut diag_done = false;
+        for k in rp[i]..rp[i + 1] {
+            if !diag_done && ci[k] > i {
+                col.push(i);
+                val.push(alpha);
+                diag_done = true;
+            }
+            if ci[k] == i {
+                col.push(i);
+                val.push(alpha + beta * v[k]);
+                diag_done = true;
+            } else {
+                col.push(ci[k]);
+                val.push(beta * v[k]);
+            }
+        }
+        if !diag_done {
+            col.push(i);
+            val.push(alpha);
+        }
+        row_ptr.push(col.len());
+    }
+    let sym = faer::sparse::SymbolicSparseRowMat::new_checked(n, n, row_ptr, None, col);
+    faer::sparse::SparseRowMat::new(sym, val)
+}

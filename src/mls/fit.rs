@@ -207,7 +207,7 @@ impl LsqFit {
             for p in 0..j {
                 d -= a[j * k + p] * a[j * k + p];
             }
-            if !(d > pivot_tol) {
+            if d.is_nan() || d <= pivot_tol {
                 return None;
             }
             let d = d.sqrt();
@@ -254,6 +254,7 @@ impl LsqFit {
     }
 
     /// Solves (Bᵀ W B) y = `rhs` in place.
+    #[allow(clippy::needless_range_loop)] // triangular sweeps read best with indices
     pub fn solve_normal(&self, rhs: &mut [Real]) {
         let k = self.k;
         for i in 0..k {

@@ -42,11 +42,14 @@ pub struct JointLaplacian {
     pub stats: FitStats,
 }
 
+/// Sparse rows as (column, value) lists, one per matrix row.
+pub type Rows = Vec<Vec<(usize, Real)>>;
+
 /// Per-particle Laplacian rows (columns sorted, self included), in parallel.
 pub fn laplacian_rows(
     nb: &Neighborhoods,
     params: &MlsParams,
-) -> Result<(Vec<Vec<(usize, Real)>>, FitStats), MlsError> {
+) -> Result<(Rows, FitStats), MlsError> {
     params.validate()?;
     let frames = par_frames(nb, params);
     let christoffel = params.christoffel;

@@ -291,7 +291,7 @@ fn plot(path: &PathBuf, pts: &[Point], colors: &[[u8; 3]]) -> Result<()> {
         }
     }
     // lines joining consecutive points of a series (in resolution order)
-    for s in 0..colors.len() {
+    for (s, &color) in colors.iter().enumerate() {
         let ser: Vec<(i64, i64)> = pts
             .iter()
             .filter(|p| p.series == s && shown(p))
@@ -303,13 +303,13 @@ fn plot(path: &PathBuf, pts: &[Point], colors: &[[u8; 3]]) -> Result<()> {
             for k in 0..=steps {
                 let x = a.0 + (b.0 - a.0) * k / steps;
                 let y = a.1 + (b.1 - a.1) * k / steps;
-                put(&mut img, x, y, colors[s]);
+                put(&mut img, x, y, color);
             }
         }
         for (x, y) in ser {
             for dx in -4..=4 {
                 for dy in -4..=4 {
-                    put(&mut img, x + dx, y + dy, colors[s]);
+                    put(&mut img, x + dx, y + dy, color);
                 }
             }
         }
