@@ -94,7 +94,8 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
             let xi = pos[i];
             let mut wsum = 0.0;
             let mut m1 = Vec3::zeros();
-            let mut m2 = Mat3::zeros();
+            // symmetric second moment: xx, xy, xz, yy, yz, zz
+            let mut m2 = [0.0; 6];
             let mut n = 0usize;
             // one pass: Σw, Σw d, Σw d dᵀ with d = x_j − x_i (local coordinates keep it exact enough)
             grid.for_each_within(pos, &xi, r, |j, d2| {
@@ -106,7 +107,13 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
                 let d = pos[j] - xi;
                 wsum += w;
                 m1 += w * d;
-                m2 += w * d * d.transpose();
+                let wd = w * d;
+                m2[0] += wd.x * d.x;
+                m2[1] += wd.x * d.y;
+                m2[2] += wd.x * d.z;
+                m2[3] += wd.y * d.y;
+                m2[4] += wd.y * d.z;
+                m2[5] += wd.z * d.z;
             });
             let mean = m1 / wsum;
             let xw = xi + mean;
@@ -128,6 +135,9 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
             if n <= p.n_eps {
                 return iso(p.kn);
             }
+            let m2 = Mat3::new(
+                m2[0], m2[1], m2[2], m2[1], m2[3], m2[4], m2[2], m2[4], m2[5],
+            );
             let c = m2 / wsum - mean * mean.transpose();
             let eig = nalgebra::SymmetricEigen::new(c);
             let s1 = eig.eigenvalues.max();

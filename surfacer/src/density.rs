@@ -116,7 +116,16 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
                         let base = Vec3::new(x as Real * h - c.x, y as Real * h - c.y, -c.z);
                         let gb = g * base;
                         let gz = g.column(2) * h;
-                        for z in lo.z.max(origin[2])..=hi.z.min(origin[2] + 7) {
+                        // |gb + z gz|² < 1 is a quadratic in z: visit only its interval
+                        let (qa, qb, qc) = (gz.norm_squared(), gb.dot(&gz), gb.norm_squared());
+                        let disc = qb * qb - qa * (qc - 1.0);
+                        if disc <= 0.0 || qa <= 0.0 {
+                            continue;
+                        }
+                        let sd = disc.sqrt();
+                        let z0 = ((-qb - sd) / qa).ceil() as i32;
+                        let z1 = ((-qb + sd) / qa).floor() as i32;
+                        for z in z0.max(lo.z).max(origin[2])..=z1.min(hi.z).min(origin[2] + 7) {
                             let q = gb + gz * z as Real;
                             let s2 = q.norm_squared();
                             if s2 < 1.0 {

@@ -8,6 +8,7 @@
 //! vertices shared between cubes and leaves are merged exactly. Vertex velocities are the
 //! linear interpolation of the voxel velocities along the edge; normals are area-weighted
 //! triangle normals.
+use crate::hash::FxMap;
 use crate::levelset::{leaf_origin, voxel_index, Leaf, LevelSet, LEAF_DIM};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -229,7 +230,9 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                 nb.tile[s] = ls.value(lo);
             }
             let mut verts: Vec<(u128, Vec3, Vec3)> = Vec::new();
-            let mut tris: Vec<[u128; 3]> = Vec::new();
+            let mut tris: Vec<[u32; 3]> = Vec::new();
+            // edge key → local vertex index (each edge is shared by up to six tetrahedra)
+            let mut local: FxMap<u128, u32> = FxMap::default();
             if nb.leaves.iter().all(|l| l.is_none())
                 && nb.tile.iter().all(|&t| (t < 0.0) == (nb.tile[0] < 0.0))
             {
@@ -249,11 +252,14 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                             continue;
                         }
                         let g = [o[0] + x, o[1] + y, o[2] + z];
-                        let mut vertex = |a: u8, b: u8| -> (u128, Vec3) {
+                        let mut vertex = |a: u8, b: u8| -> (u32, Vec3) {
                             let (a, b) = if a < b { (a, b) } else { (b, a) };
                             let ca = corner(a);
                             let ga = [g[0] + ca[0], g[1] + ca[1], g[2] + ca[2]];
                             let key = edge_key(ga, b & !a);
+                            if let Some(&i) = local.get(&key) {
+                                return (i, verts[i as usize].1);
+                            }
                             let (pa, va) = val[a as usize];
                             let (pb, vb) = val[b as usize];
                             let t = (pa as Real / (pa as Real - pb as Real)).clamp(0.0, 1.0);
@@ -267,28 +273,33 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                             let p = (xa + t * d) * h;
                             let v =
                                 |q: [f32; 3]| Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
+                            let i = verts.len() as u32;
                             verts.push((key, p, v(va) * (1.0 - t) + v(vb) * t));
-                            (key, p)
+                            local.insert(key, i);
+                            (i, p)
                         };
                         let cv = |c: u8| {
                             let d = corner(c);
                             Vec3::new(d[0] as Real, d[1] as Real, d[2] as Real)
                         };
                         for tet in TETS {
-                            let ins: Vec<u8> = tet
-                                .iter()
-                                .copied()
-                                .filter(|&c| mask >> c & 1 == 1)
-                                .collect();
-                            let out: Vec<u8> = tet
-                                .iter()
-                                .copied()
-                                .filter(|&c| mask >> c & 1 == 0)
-                                .collect();
+                            let (mut ins, mut ni, mut out, mut no) = ([0u8; 4], 0, [0u8; 4], 0);
+                            for c in tet {
+                                if mask >> c & 1 == 1 {
+                                    ins[ni] = c;
+                                    ni += 1;
+                                } else {
+                                    out[no] = c;
+                                    no += 1;
+                                }
+                            }
+                            if ni == 0 || no == 0 {
+                                continue;
+                            }
                             // outward direction: from the inside corners to the outside ones
-                            let dir = out.iter().map(|&c| cv(c)).sum::<Vec3>() / out.len() as Real
-                                - ins.iter().map(|&c| cv(c)).sum::<Vec3>() / ins.len() as Real;
-                            let mut emit = |a: (u128, Vec3), b: (u128, Vec3), c: (u128, Vec3)| {
+                            let dir = out[..no].iter().map(|&c| cv(c)).sum::<Vec3>() / no as Real
+                                - ins[..ni].iter().map(|&c| cv(c)).sum::<Vec3>() / ni as Real;
+                            let mut emit = |a: (u32, Vec3), b: (u32, Vec3), c: (u32, Vec3)| {
                                 let n = (b.1 - a.1).cross(&(c.1 - a.1));
                                 if n.dot(&dir) >= 0.0 {
                                     tris.push([a.0, b.0, c.0]);
@@ -296,9 +307,9 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                                     tris.push([a.0, c.0, b.0]);
                                 }
                             };
-                            match ins.len() {
+                            match ni {
                                 1 | 3 => {
-                                    let (apex, rest) = if ins.len() == 1 {
+                                    let (apex, rest) = if ni == 1 {
                                         (ins[0], [out[0], out[1], out[2]])
                                     } else {
                                         (out[0], [ins[0], ins[1], ins[2]])
@@ -323,16 +334,8 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                     }
                 }
             }
-            // merge the vertices emitted several times inside this block (one per tetrahedron)
-            verts.sort_unstable_by_key(|v| v.0);
-            verts.dedup_by_key(|v| v.0);
             verts.shrink_to_fit();
-            let local = |k: u128| -> u32 {
-                verts
-                    .binary_search_by_key(&k, |v| v.0)
-                    .expect("vertex emitted with its triangle") as u32
-            };
-            let tris: Vec<[u32; 3]> = tris.iter().map(|t| t.map(local)).collect();
+            tris.shrink_to_fit();
             (verts, tris)
         })
         .collect();

@@ -61,7 +61,12 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                     for (si, s) in [-1i32, 1].into_iter().enumerate() {
                         let mut nb = ijk;
                         nb[a] += s;
-                        let fnb = d.f(nb);
+                        // same block: direct index; otherwise a lookup
+                        let fnb = if (nb[a] & !7) == b.origin[a] {
+                            b.f[voxel_index(nb)]
+                        } else {
+                            d.f(nb)
+                        };
                         fs[si] = fnb;
                         if (fnb >= iso) != ins {
                             let t = ((f - iso) as Real / (f - fnb) as Real).clamp(0.0, 1.0);
