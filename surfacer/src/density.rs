@@ -5,7 +5,8 @@
 //! The field is computed block by block (8³ voxels, the level set's leaf size): each particle is
 //! binned into the blocks its kernel box touches, and every block sums its particles in index
 //! order — parallel over blocks and independent of the thread count. Only blocks some kernel
-//! touches exist; a block is kept at 16 bytes per voxel until the band is built.
+//! touches exist; a block is kept at 16 bytes per voxel until the band is built. Blocks are stored
+//! inline in one vector, so dropping the field returns its memory to the system at once.
 use crate::anisotropy::Kernels;
 use crate::hash::{FxMap, Key};
 use crate::levelset::{leaf_origin, voxel_index, LEAF_DIM, LEAF_SIZE};
@@ -17,9 +18,9 @@ pub struct DensityBlock {
     /// voxel coordinates of voxel 0
     pub origin: Key,
     /// volume fraction (1 in the bulk)
-    pub f: Box<[f32; LEAF_SIZE]>,
+    pub f: [f32; LEAF_SIZE],
     /// kernel-weighted velocity (m/s)
-    pub vel: Box<[[f32; 3]; LEAF_SIZE]>,
+    pub vel: [[f32; 3]; LEAF_SIZE],
 }
 
 /// The blocked field.
@@ -141,8 +142,8 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
                     }
                 }
             }
-            let mut fo = Box::new([0f32; LEAF_SIZE]);
-            let mut vo = Box::new([[0f32; 3]; LEAF_SIZE]);
+            let mut fo = [0f32; LEAF_SIZE];
+            let mut vo = [[0f32; 3]; LEAF_SIZE];
             for n in 0..LEAF_SIZE {
                 fo[n] = f[n] as f32;
                 if f[n] > 0.0 {
