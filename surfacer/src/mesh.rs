@@ -7,7 +7,7 @@
 //! as outside. A surface vertex is identified by its grid edge (lower corner, direction), so
 //! vertices shared between cubes and leaves are merged exactly. Vertex velocities are the
 //! linear interpolation of the voxel velocities along the edge; normals are area-weighted
-//! triangle normals.
+//! triangle normals. Vertices are held as f32 while merging (the PLY stores f32 anyway).
 use crate::hash::FxMap;
 use crate::levelset::{leaf_origin, voxel_index, Leaf, LevelSet, LEAF_DIM};
 use crate::{Real, Vec3};
@@ -185,13 +185,14 @@ fn corner(c: u8) -> [i32; 3] {
 }
 
 #[inline]
-fn edge_key(g: [i32; 3], dir: u8) -> u128 {
-    let p = |x: i32| (x as i64 + (1i64 << 31)) as u128;
-    p(g[0]) << 67 | p(g[1]) << 35 | p(g[2]) << 3 | dir as u128
+fn edge_key(g: [i32; 3], dir: u8) -> u64 {
+    // 20 bits per coordinate: |index| < 2^19 (checked in `pipeline`), 3 bits of direction
+    let p = |x: i32| ((x as i64 + (1i64 << 19)) as u64) & 0xF_FFFF;
+    p(g[0]) << 43 | p(g[1]) << 23 | p(g[2]) << 3 | dir as u64
 }
 
 /// One block's vertices (edge key, position, velocity) and triangles (local indices).
-type BlockMesh = (Vec<(u128, Vec3, Vec3)>, Vec<[u32; 3]>);
+type BlockMesh = (Vec<(u64, [f32; 3], [f32; 3])>, Vec<[u32; 3]>);
 
 /// Extracts the zero crossing of `ls` as a triangle mesh.
 pub fn marching_tets(ls: &LevelSet) -> TriMesh {
@@ -229,10 +230,10 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                 nb.leaves[s] = ls.leaf(lo);
                 nb.tile[s] = ls.value(lo);
             }
-            let mut verts: Vec<(u128, Vec3, Vec3)> = Vec::new();
+            let mut verts: Vec<(u64, [f32; 3], [f32; 3])> = Vec::new();
             let mut tris: Vec<[u32; 3]> = Vec::new();
             // edge key → local vertex index (each edge is shared by up to six tetrahedra)
-            let mut local: FxMap<u128, u32> = FxMap::default();
+            let mut local: FxMap<u64, u32> = FxMap::default();
             if nb.leaves.iter().all(|l| l.is_none())
                 && nb.tile.iter().all(|&t| (t < 0.0) == (nb.tile[0] < 0.0))
             {
@@ -257,8 +258,10 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                             let ca = corner(a);
                             let ga = [g[0] + ca[0], g[1] + ca[1], g[2] + ca[2]];
                             let key = edge_key(ga, b & !a);
+                            let v64 =
+                                |q: [f32; 3]| Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
                             if let Some(&i) = local.get(&key) {
-                                return (i, verts[i as usize].1);
+                                return (i, v64(verts[i as usize].1));
                             }
                             let (pa, va) = val[a as usize];
                             let (pb, vb) = val[b as usize];
@@ -274,9 +277,11 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                             let v =
                                 |q: [f32; 3]| Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
                             let i = verts.len() as u32;
-                            verts.push((key, p, v(va) * (1.0 - t) + v(vb) * t));
+                            let u = v(va) * (1.0 - t) + v(vb) * t;
+                            let p32 = [p.x as f32, p.y as f32, p.z as f32];
+                            verts.push((key, p32, [u.x as f32, u.y as f32, u.z as f32]));
                             local.insert(key, i);
-                            (i, p)
+                            (i, v64(p32))
                         };
                         let cv = |c: u8| {
                             let d = corner(c);
@@ -344,7 +349,7 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     let nt: usize = parts.iter().map(|p| p.1.len()).sum();
     let mut flat_pos = Vec::with_capacity(nv);
     let mut flat_vel = Vec::with_capacity(nv);
-    let mut keys: Vec<(u128, u32)> = Vec::with_capacity(nv);
+    let mut keys: Vec<(u64, u32)> = Vec::with_capacity(nv);
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(nt);
     for (v, t) in parts {
         let off = flat_pos.len() as u32;
@@ -362,8 +367,10 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     let mut s = 0;
     while s < keys.len() {
         let id = pos.len() as u32;
-        pos.push(flat_pos[keys[s].1 as usize]);
-        vel.push(flat_vel[keys[s].1 as usize]);
+        let (p, u): ([f32; 3], [f32; 3]) =
+            (flat_pos[keys[s].1 as usize], flat_vel[keys[s].1 as usize]);
+        pos.push(Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real));
+        vel.push(Vec3::new(u[0] as Real, u[1] as Real, u[2] as Real));
         let mut e = s;
         while e < keys.len() && keys[e].0 == keys[s].0 {
             remap[keys[e].1 as usize] = id;
