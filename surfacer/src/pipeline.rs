@@ -192,11 +192,15 @@ pub fn surface_particles(
         .map(|&i| 4.0 / 3.0 * std::f64::consts::PI * frame.pscale[i].powi(3))
         .collect();
     let kernels = build_kernels(&vpos, &vvol, dx, &o.aniso);
+    drop(vpos);
+    let target: Real = vvol.iter().sum();
+    drop(vvol);
     st.isotropic_kernels = kernels.isotropic;
     st.seconds[0] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let dens = crate::density::rasterize(&kernels, &vvel, h);
+    drop(vvel);
     drop(kernels);
     st.density_blocks = dens.blocks.len();
     st.seconds[1] = t.elapsed().as_secs_f64();
@@ -205,7 +209,6 @@ pub fn surface_particles(
     let (mut grid, extra_inside, info): (WorkGrid, _, _) = redistance(&dens, iso, band);
     st.redistance = info;
     if o.conserve_volume && !vi.is_empty() {
-        let target: Real = vvol.iter().sum();
         st.volume_shift = crate::redistance::conserve_volume(&mut grid, &dens, iso, target, band);
     }
     st.seconds[2] = t.elapsed().as_secs_f64();
