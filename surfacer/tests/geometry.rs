@@ -254,3 +254,31 @@ fn anisotropic_kernels_give_a_flatter_free_surface_than_isotropic() {
     // volume conservation puts both top faces half a spacing above the last layer (z = 5.5 Δ)
     assert!((ma - 5.5 * dx).abs() < 0.1 * dx && (mi - 5.5 * dx).abs() < 0.1 * dx);
 }
+
+#[test]
+fn sheet_disks_get_the_sheets_thickness_from_mass() {
+    // thick sheet (6 voxels) so the clamp does not act: slab thickness = mass / (ρ s²)
+    let mut f = ParticleFrame::default();
+    let (ds, th) = (0.02, 0.06);
+    flat_sheet(&mut f, 0.0, 0.3, ds, th);
+    ball(
+        &mut f,
+        Vec3::new(2.0, 0.0, 0.0),
+        0.05,
+        0.02,
+        0.0,
+        Vec3::zeros(),
+    );
+    let g = surface_particles(&f, &SurfaceOptions::default()).unwrap();
+    let h = g.stats.voxel;
+    // φ along the normal through the centre crosses zero at ±th/2
+    let z0 = (1..60)
+        .map(|k| k as Real * 0.1 * h)
+        .find(|&z| g.levelset.sample(&Vec3::new(0.0, 0.0, z)) > 0.0)
+        .unwrap();
+    assert!(
+        (z0 - 0.5 * th).abs() < 0.3 * h,
+        "half thickness {z0} vs {}",
+        0.5 * th
+    );
+}
