@@ -41,10 +41,7 @@ pub struct CellGrid {
 impl CellGrid {
     /// Builds the grid over `points` with cell size `h` (> 0, finite).
     pub fn build(points: &[Vec3], h: Real) -> CellGrid {
-        assert!(
-            h > 0.0 && h.is_finite(),
-            "cell size must be positive and finite"
-        );
+        assert!(h > 0.0 && h.is_finite(), "cell size must be positive and finite");
         let inv_h = 1.0 / h;
         let cells: Vec<Cell> = points.par_iter().map(|p| cell_of(p, inv_h)).collect();
         let mut order: Vec<u32> = (0..points.len() as u32).collect();
@@ -61,12 +58,7 @@ impl CellGrid {
             ranges.insert(c, (s as u32, e as u32));
             s = e;
         }
-        CellGrid {
-            h,
-            inv_h,
-            order,
-            ranges,
-        }
+        CellGrid { h, inv_h, order, ranges }
     }
 
     /// Cell size.
@@ -78,13 +70,7 @@ impl CellGrid {
     /// `r` must not exceed the cell size. The visiting order is deterministic
     /// but not sorted.
     #[inline]
-    pub fn for_each_within(
-        &self,
-        points: &[Vec3],
-        q: &Vec3,
-        r: Real,
-        mut f: impl FnMut(usize, Real),
-    ) {
+    pub fn for_each_within(&self, points: &[Vec3], q: &Vec3, r: Real, mut f: impl FnMut(usize, Real)) {
         debug_assert!(r <= self.h * (1.0 + 1e-12));
         let r2 = r * r;
         let c = cell_of(q, self.inv_h);
@@ -230,11 +216,7 @@ mod tests {
                 for k in 0..n {
                     // a little deterministic jitter so no distance ties the radius exactly
                     let j3 = ((i * 7 + j * 13 + k * 29) % 17) as Real / 17.0 * 0.1 * s;
-                    v.push(Vec3::new(
-                        i as Real * s + j3,
-                        j as Real * s - j3,
-                        k as Real * s + 0.5 * j3,
-                    ));
+                    v.push(Vec3::new(i as Real * s + j3, j as Real * s - j3, k as Real * s + 0.5 * j3));
                 }
             }
         }
@@ -265,10 +247,7 @@ mod tests {
 
     #[test]
     fn negative_coordinates_and_between() {
-        let pts: Vec<Vec3> = lattice(6, 0.1)
-            .into_iter()
-            .map(|p| p - Vec3::new(0.3, 0.3, 0.3))
-            .collect();
+        let pts: Vec<Vec3> = lattice(6, 0.1).into_iter().map(|p| p - Vec3::new(0.3, 0.3, 0.3)).collect();
         let q = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(-0.3, -0.3, -0.3)];
         let nl = neighbor_lists_between(&q, &pts, 0.15);
         for (qi, qp) in q.iter().enumerate() {
