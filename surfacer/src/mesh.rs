@@ -1,9 +1,10 @@
 //! Triangle meshes and the zero-crossing extraction by marching tetrahedra.
 //!
-//! Every grid cube is split into the six tetrahedra of the Kuhn (Freudenthal) triangulation
-//! around its main diagonal, v000 → v111; this triangulation is the same from both sides of every
-//! face, so the piecewise-linear zero set it defines is a closed 2-manifold wherever the field
-//! is, with no ambiguous cases (unlike marching cubes' 33 configurations). Voxels with φ = 0 count
+//! Every grid cube is split into five tetrahedra (a central one and four corner ones), mirrored on
+//! cubes of odd parity; neighbouring cubes then cut every shared face along the same diagonal, so
+//! the piecewise-linear zero set is a closed 2-manifold wherever the field is, with no ambiguous
+//! cases (unlike marching cubes' 33 configurations). (The six-tetrahedra Kuhn split works too but
+//! gives ~20 % more triangles.) Voxels with φ = 0 count
 //! as outside. A surface vertex is identified by its grid edge (lower corner, direction), so
 //! vertices shared between cubes and leaves are merged exactly. Vertex velocities are the
 //! linear interpolation of the voxel velocities along the edge; normals are area-weighted
@@ -169,14 +170,22 @@ impl Nbhd<'_> {
     }
 }
 
-/// Kuhn triangulation: the six tetrahedra (as cube-corner bit masks x=4, y=2, z=1).
-const TETS: [[u8; 4]; 6] = [
-    [0, 4, 6, 7],
-    [0, 4, 5, 7],
-    [0, 2, 6, 7],
-    [0, 2, 3, 7],
-    [0, 1, 5, 7],
-    [0, 1, 3, 7],
+/// Five-tetrahedra split of a cube (corner bit masks x=4, y=2, z=1): a central tetrahedron and
+/// four corner ones, mirrored on cubes of odd parity (i+j+k odd) so that neighbouring cubes cut
+/// every shared face along the same diagonal (a conforming triangulation of the lattice).
+const TETS_EVEN: [[u8; 4]; 5] = [
+    [1, 2, 4, 7],
+    [0, 1, 2, 4],
+    [3, 1, 2, 7],
+    [5, 1, 4, 7],
+    [6, 2, 4, 7],
+];
+const TETS_ODD: [[u8; 4]; 5] = [
+    [0, 3, 5, 6],
+    [1, 0, 3, 5],
+    [2, 0, 3, 6],
+    [4, 0, 5, 6],
+    [7, 3, 5, 6],
 ];
 
 #[inline]
@@ -185,10 +194,11 @@ fn corner(c: u8) -> [i32; 3] {
 }
 
 #[inline]
-fn edge_key(g: [i32; 3], dir: u8) -> u64 {
-    // 20 bits per coordinate: |index| < 2^19 (checked in `pipeline`), 3 bits of direction
-    let p = |x: i32| ((x as i64 + (1i64 << 19)) as u64) & 0xF_FFFF;
-    p(g[0]) << 43 | p(g[1]) << 23 | p(g[2]) << 3 | dir as u64
+fn edge_key(g: [i32; 3], d: [i32; 3]) -> u64 {
+    // 19 bits per coordinate: |index| < 2^18 (checked in `pipeline`); direction in 5 bits
+    let p = |x: i32| ((x as i64 + (1i64 << 18)) as u64) & 0x7_FFFF;
+    let dir = ((d[0] + 1) * 9 + (d[1] + 1) * 3 + (d[2] + 1)) as u64;
+    p(g[0]) << 43 | p(g[1]) << 24 | p(g[2]) << 5 | dir
 }
 
 /// One block's vertices (edge key, position, velocity) and triangles (local indices).
@@ -254,10 +264,17 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                         }
                         let g = [o[0] + x, o[1] + y, o[2] + z];
                         let mut vertex = |a: u8, b: u8| -> (u32, Vec3) {
-                            let (a, b) = if a < b { (a, b) } else { (b, a) };
+                            // canonical direction: from the lexicographically lower corner
+                            let (a, b) = if corner(a) < corner(b) {
+                                (a, b)
+                            } else {
+                                (b, a)
+                            };
                             let ca = corner(a);
                             let ga = [g[0] + ca[0], g[1] + ca[1], g[2] + ca[2]];
-                            let key = edge_key(ga, b & !a);
+                            let cb0 = corner(b);
+                            let key =
+                                edge_key(ga, [cb0[0] - ca[0], cb0[1] - ca[1], cb0[2] - ca[2]]);
                             let v64 =
                                 |q: [f32; 3]| Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
                             if let Some(&i) = local.get(&key) {
@@ -287,7 +304,12 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                             let d = corner(c);
                             Vec3::new(d[0] as Real, d[1] as Real, d[2] as Real)
                         };
-                        for tet in TETS {
+                        let tets = if (g[0] + g[1] + g[2]) & 1 == 0 {
+                            &TETS_EVEN
+                        } else {
+                            &TETS_ODD
+                        };
+                        for &tet in tets {
                             let (mut ins, mut ni, mut out, mut no) = ([0u8; 4], 0, [0u8; 4], 0);
                             for c in tet {
                                 if mask >> c & 1 == 1 {

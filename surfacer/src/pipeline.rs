@@ -174,7 +174,7 @@ pub fn surface_particles(
     st.voxel = h;
     // index range check
     let ext = frame.pos.iter().fold(0.0f64, |m, p| m.max(p.amax()));
-    if ext / h > ((1u64 << 19) - 64) as Real {
+    if ext / h > ((1u64 << 18) - 64) as Real {
         return Err(SurfaceError::GridTooLarge {
             voxels: (ext / h).powi(3),
             voxel_size: h,
