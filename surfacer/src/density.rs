@@ -172,3 +172,44 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
         index,
     }
 }
+
+/// Inside/outside (f ≥ f_iso) of every voxel of the density blocks, one bit per voxel: what the
+/// later stages need once the band is seeded, at 1/128 of the field's memory.
+#[derive(Default)]
+pub struct SignField {
+    /// block origins and their inside masks (bit n of word n/64)
+    pub blocks: Vec<(Key, [u64; 8])>,
+    index: FxMap<Key, usize>,
+}
+
+impl SignField {
+    /// Signs of `d` at the iso-value `iso`.
+    pub fn new(d: &DensityField, iso: f32) -> Self {
+        let blocks: Vec<(Key, [u64; 8])> = d
+            .blocks
+            .par_iter()
+            .map(|b| {
+                let mut m = [0u64; 8];
+                for n in 0..LEAF_SIZE {
+                    if b.f[n] >= iso {
+                        m[n >> 6] |= 1 << (n & 63);
+                    }
+                }
+                (b.origin, m)
+            })
+            .collect();
+        let index = blocks.iter().enumerate().map(|(i, b)| (b.0, i)).collect();
+        SignField { blocks, index }
+    }
+    /// Is voxel `ijk` inside (outside every block: no)?
+    #[inline]
+    pub fn inside(&self, ijk: Key) -> bool {
+        match self.index.get(&leaf_origin(ijk)) {
+            Some(&b) => {
+                let n = voxel_index(ijk);
+                self.blocks[b].1[n >> 6] >> (n & 63) & 1 == 1
+            }
+            None => false,
+        }
+    }
+}

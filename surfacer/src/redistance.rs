@@ -12,7 +12,7 @@
 //!    independent of the thread count. Propagation stops past the band.
 //!
 //! The sign of every voxel comes from f itself, so inside never depends on the propagation.
-use crate::density::DensityField;
+use crate::density::{DensityField, SignField};
 use crate::hash::Key;
 use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, LEAF_SIZE};
 use crate::{Real, Vec3};
@@ -33,12 +33,16 @@ type Entry = (Key, f32, [f32; 3], [f32; 3]);
 /// A propagated voxel: (index in leaf, φ, closest point, velocity).
 type Update = (usize, f32, [f32; 3], [f32; 3]);
 
-/// Builds the band of half width `band`·Δx around f = `iso`. Returns the grid, the origins of
-/// density blocks entirely inside that are not in the band, and counts.
-pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>, RedistanceInfo) {
+/// Builds the band of half width `band`·Δx around f = `iso`. The field is consumed once the seeds
+/// are taken (only its signs are kept). Returns the grid, the origins of density blocks entirely
+/// inside that are not in the band, the signs, and counts.
+pub fn redistance(
+    d: DensityField,
+    iso: f32,
+    band: Real,
+) -> (WorkGrid, Vec<Key>, SignField, RedistanceInfo) {
     let h = d.voxel;
     let bg = (band * h) as f32;
-    let inside = |ijk: Key| d.f(ijk) >= iso;
     let world = |k: Key| Vec3::new(k[0] as Real, k[1] as Real, k[2] as Real) * h;
     let mut info = RedistanceInfo::default();
 
@@ -108,6 +112,9 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
         })
         .collect();
     info.seeds = seeds.len();
+    let signs = SignField::new(&d, iso);
+    drop(d);
+    let inside = |ijk: Key| signs.inside(ijk);
     info.flat_gradient = seeds.iter().filter(|s| s.1).count();
 
     let mut grid = WorkGrid::new(h, bg);
@@ -273,16 +280,16 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
         }
     }
 
-    let extra_inside: Vec<Key> = d
+    let extra_inside: Vec<Key> = signs
         .blocks
         .par_iter()
         .filter(|b| {
-            !grid.index.contains_key(&b.origin)
-                && b.f.iter().filter(|&&f| f >= iso).count() * 2 > LEAF_SIZE
+            !grid.index.contains_key(&b.0)
+                && b.1.iter().map(|w| w.count_ones() as usize).sum::<usize>() * 2 > LEAF_SIZE
         })
-        .map(|b| b.origin)
+        .map(|b| b.0)
         .collect();
-    (grid, extra_inside, info)
+    (grid, extra_inside, signs, info)
 }
 
 /// Volume-preserving offset. Centre smoothing (λ) and flattened surface kernels pull the
@@ -290,13 +297,7 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
 /// restore the particles' total volume V_p: with the grid's enclosed volume V(φ) and surface area
 /// A(φ), both from a smeared Heaviside of width ε = 1.5 Δx (V = Δx³ Σ H(−φ), A = Δx³ Σ δ(φ)),
 /// every band value is shifted by d = (V(φ) − V_p)/A, clamped to ±band/2. Returns the shift (m).
-pub fn conserve_volume(
-    grid: &mut WorkGrid,
-    d: &DensityField,
-    iso: f32,
-    target: Real,
-    band: Real,
-) -> Real {
+pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, band: Real) -> Real {
     let h = grid.voxel;
     let eps = 1.5 * h;
     let heav = |x: Real| {
@@ -316,11 +317,11 @@ pub fn conserve_volume(
         }
     };
     let h3 = h * h * h;
-    let interior = d
+    let interior = signs
         .blocks
         .par_iter()
-        .filter(|b| !grid.index.contains_key(&b.origin))
-        .map(|b| b.f.iter().filter(|&&f| f >= iso).count() as Real)
+        .filter(|b| !grid.index.contains_key(&b.0))
+        .map(|b| b.1.iter().map(|w| w.count_ones() as Real).sum::<Real>())
         .sum::<Real>();
     // V(s), A(s) of the shifted field φ + s
     let eval = |s: Real| {
