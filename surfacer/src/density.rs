@@ -69,21 +69,15 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
             let e = k.extent[i];
             let lo = leaf_origin(((c - e) * inv).map(|x| x.ceil() as i32).into());
             let hi = leaf_origin(((c + e) * inv).map(|x| x.floor() as i32).into());
-            let mut v = Vec::new();
-            let mut x = lo[0];
-            while x <= hi[0] {
-                let mut y = lo[1];
-                while y <= hi[1] {
-                    let mut z = lo[2];
-                    while z <= hi[2] {
-                        v.push(([x, y, z], i as u32));
-                        z += LEAF_DIM;
-                    }
-                    y += LEAF_DIM;
-                }
-                x += LEAF_DIM;
-            }
-            v
+            // lazily, without a vector per particle
+            let step = LEAF_DIM as usize;
+            (lo[0]..=hi[0]).step_by(step).flat_map(move |x| {
+                (lo[1]..=hi[1]).step_by(step).flat_map(move |y| {
+                    (lo[2]..=hi[2])
+                        .step_by(step)
+                        .map(move |z| ([x, y, z], i as u32))
+                })
+            })
         })
         .collect();
     pairs.par_sort_unstable();
