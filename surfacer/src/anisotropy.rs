@@ -85,79 +85,98 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
     let h = kernel_radius(p, dx);
     let ks = p.ks_rel / (0.15 * r * r);
     let grid = CellGrid::build(pos, r);
-    // visit particles in cell order (neighbours stay in cache), then scatter back
-    let per_sorted: Vec<(Vec3, Mat3, Real, Vec3, bool)> = grid
-        .order()
-        .par_iter()
-        .map(|&i| {
-            let i = i as usize;
-            let xi = pos[i];
-            let mut wsum = 0.0;
-            let mut m1 = Vec3::zeros();
-            let mut m2 = Mat3::zeros();
-            let mut n = 0usize;
-            // one pass: Σw, Σw d, Σw d dᵀ with d = x_j − x_i (local coordinates keep it exact enough)
-            grid.for_each_within(pos, &xi, r, |j, d2| {
-                if j != i {
-                    n += 1;
-                }
-                let q = d2.sqrt() / r;
-                let w = 1.0 - q * q * q;
-                let d = pos[j] - xi;
-                wsum += w;
-                m1 += w * d;
-                m2 += w * d * d.transpose();
-            });
-            let mean = m1 / wsum;
-            let xw = xi + mean;
-            let center = (1.0 - p.lambda) * xi + p.lambda * xw;
-            let iso = |scale: Real| {
-                let s = 1.0 / (scale * h);
-                let g = Mat3::identity() * s;
-                (
-                    center,
-                    g,
-                    SIGMA_P * s * s * s * vol[i],
-                    Vec3::repeat(scale * h),
-                    true,
-                )
-            };
-            if !p.anisotropic {
-                return iso(1.0);
+    // the kernel of particle i (visited in cell order below: neighbours stay in cache)
+    let kernel_of = |i: u32| {
+        let i = i as usize;
+        let xi = pos[i];
+        let mut wsum = 0.0;
+        let mut m1 = Vec3::zeros();
+        // symmetric second moment: xx, xy, xz, yy, yz, zz
+        let mut m2 = [0.0; 6];
+        let mut n = 0usize;
+        // one pass: Σw, Σw d, Σw d dᵀ with d = x_j − x_i (local coordinates keep it exact enough)
+        grid.for_each_within(pos, &xi, r, |j, d2| {
+            if j != i {
+                n += 1;
             }
-            if n <= p.n_eps {
-                return iso(p.kn);
-            }
-            let c = m2 / wsum - mean * mean.transpose();
-            let eig = nalgebra::SymmetricEigen::new(c);
-            let s1 = eig.eigenvalues.max();
-            if s1.is_nan() || s1 <= 0.0 || !s1.is_finite() {
-                return iso(p.kn);
-            }
-            let floor = s1 / p.kr;
-            let sig = eig.eigenvalues.map(|s| ks * s.max(floor));
-            let rm = eig.eigenvectors;
-            let inv = Mat3::from_diagonal(&sig.map(|s| 1.0 / s));
-            let g = rm * inv * rm.transpose() / h;
-            let det = 1.0 / (sig.x * sig.y * sig.z * h * h * h);
-            // bounding box of the ellipsoid {x : |G x| < 1} = h R Σ̃ (unit ball)
-            let a = rm * Mat3::from_diagonal(&sig) * h;
-            let ext = Vec3::new(a.row(0).norm(), a.row(1).norm(), a.row(2).norm());
-            (center, g, SIGMA_P * det * vol[i], ext, false)
-        })
-        .collect();
-    // kernels stay in cell order (better locality for the density pass); `index` maps back
+            let q = d2.sqrt() / r;
+            let w = 1.0 - q * q * q;
+            let d = pos[j] - xi;
+            wsum += w;
+            m1 += w * d;
+            let wd = w * d;
+            m2[0] += wd.x * d.x;
+            m2[1] += wd.x * d.y;
+            m2[2] += wd.x * d.z;
+            m2[3] += wd.y * d.y;
+            m2[4] += wd.y * d.z;
+            m2[5] += wd.z * d.z;
+        });
+        let mean = m1 / wsum;
+        let xw = xi + mean;
+        let center = (1.0 - p.lambda) * xi + p.lambda * xw;
+        let iso = |scale: Real| {
+            let s = 1.0 / (scale * h);
+            let g = Mat3::identity() * s;
+            (
+                center,
+                g,
+                SIGMA_P * s * s * s * vol[i],
+                Vec3::repeat(scale * h),
+                true,
+            )
+        };
+        if !p.anisotropic {
+            return iso(1.0);
+        }
+        if n <= p.n_eps {
+            return iso(p.kn);
+        }
+        let m2 = Mat3::new(
+            m2[0], m2[1], m2[2], m2[1], m2[3], m2[4], m2[2], m2[4], m2[5],
+        );
+        let c = m2 / wsum - mean * mean.transpose();
+        let eig = nalgebra::SymmetricEigen::new(c);
+        let s1 = eig.eigenvalues.max();
+        if s1.is_nan() || s1 <= 0.0 || !s1.is_finite() {
+            return iso(p.kn);
+        }
+        let floor = s1 / p.kr;
+        let sig = eig.eigenvalues.map(|s| ks * s.max(floor));
+        let rm = eig.eigenvectors;
+        let inv = Mat3::from_diagonal(&sig.map(|s| 1.0 / s));
+        let g = rm * inv * rm.transpose() / h;
+        let det = 1.0 / (sig.x * sig.y * sig.z * h * h * h);
+        // bounding box of the ellipsoid {x : |G x| < 1} = h R Σ̃ (unit ball)
+        let a = rm * Mat3::from_diagonal(&sig) * h;
+        let ext = Vec3::new(a.row(0).norm(), a.row(1).norm(), a.row(2).norm());
+        (center, g, SIGMA_P * det * vol[i], ext, false)
+    };
+
+    // kernels stay in cell order (better locality for the density pass); `index` maps back.
+    // Written straight into the arrays (no temporary per-particle tuples).
+    let n = pos.len();
     let mut k = Kernels {
         index: grid.order().to_vec(),
-        ..Default::default()
+        center: vec![Vec3::zeros(); n],
+        g: vec![Mat3::zeros(); n],
+        amp: vec![0.0; n],
+        extent: vec![Vec3::zeros(); n],
+        isotropic: 0,
     };
-    for (c, g, a, e, iso) in per_sorted {
-        k.center.push(c);
-        k.g.push(g);
-        k.amp.push(a);
-        k.extent.push(e);
-        k.isotropic += iso as usize;
-    }
+    let mut iso_flag = vec![false; n];
+    k.center
+        .par_iter_mut()
+        .zip(k.g.par_iter_mut())
+        .zip(k.amp.par_iter_mut())
+        .zip(k.extent.par_iter_mut())
+        .zip(iso_flag.par_iter_mut())
+        .zip(k.index.par_iter())
+        .for_each(|(((((c, g), a), e), f), &i)| {
+            let r = kernel_of(i);
+            (*c, *g, *a, *e, *f) = r;
+        });
+    k.isotropic = iso_flag.iter().filter(|&&f| f).count();
     k
 }
 

@@ -5,7 +5,8 @@
 //! The field is computed block by block (8³ voxels, the level set's leaf size): each particle is
 //! binned into the blocks its kernel box touches, and every block sums its particles in index
 //! order — parallel over blocks and independent of the thread count. Only blocks some kernel
-//! touches exist; a block is kept at 16 bytes per voxel until the band is built.
+//! touches exist; a block is kept at 16 bytes per voxel until the band is built. Blocks are stored
+//! inline in one vector, so dropping the field returns its memory to the system at once.
 use crate::anisotropy::Kernels;
 use crate::hash::{FxMap, Key};
 use crate::levelset::{leaf_origin, voxel_index, LEAF_DIM, LEAF_SIZE};
@@ -17,9 +18,9 @@ pub struct DensityBlock {
     /// voxel coordinates of voxel 0
     pub origin: Key,
     /// volume fraction (1 in the bulk)
-    pub f: Box<[f32; LEAF_SIZE]>,
+    pub f: [f32; LEAF_SIZE],
     /// kernel-weighted velocity (m/s)
-    pub vel: Box<[[f32; 3]; LEAF_SIZE]>,
+    pub vel: [[f32; 3]; LEAF_SIZE],
 }
 
 /// The blocked field.
@@ -68,21 +69,15 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
             let e = k.extent[i];
             let lo = leaf_origin(((c - e) * inv).map(|x| x.ceil() as i32).into());
             let hi = leaf_origin(((c + e) * inv).map(|x| x.floor() as i32).into());
-            let mut v = Vec::new();
-            let mut x = lo[0];
-            while x <= hi[0] {
-                let mut y = lo[1];
-                while y <= hi[1] {
-                    let mut z = lo[2];
-                    while z <= hi[2] {
-                        v.push(([x, y, z], i as u32));
-                        z += LEAF_DIM;
-                    }
-                    y += LEAF_DIM;
-                }
-                x += LEAF_DIM;
-            }
-            v
+            // lazily, without a vector per particle
+            let step = LEAF_DIM as usize;
+            (lo[0]..=hi[0]).step_by(step).flat_map(move |x| {
+                (lo[1]..=hi[1]).step_by(step).flat_map(move |y| {
+                    (lo[2]..=hi[2])
+                        .step_by(step)
+                        .map(move |z| ([x, y, z], i as u32))
+                })
+            })
         })
         .collect();
     pairs.par_sort_unstable();
@@ -116,7 +111,16 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
                         let base = Vec3::new(x as Real * h - c.x, y as Real * h - c.y, -c.z);
                         let gb = g * base;
                         let gz = g.column(2) * h;
-                        for z in lo.z.max(origin[2])..=hi.z.min(origin[2] + 7) {
+                        // |gb + z gz|² < 1 is a quadratic in z: visit only its interval
+                        let (qa, qb, qc) = (gz.norm_squared(), gb.dot(&gz), gb.norm_squared());
+                        let disc = qb * qb - qa * (qc - 1.0);
+                        if disc <= 0.0 || qa <= 0.0 {
+                            continue;
+                        }
+                        let sd = disc.sqrt();
+                        let z0 = ((-qb - sd) / qa).ceil() as i32;
+                        let z1 = ((-qb + sd) / qa).floor() as i32;
+                        for z in z0.max(lo.z).max(origin[2])..=z1.min(hi.z).min(origin[2] + 7) {
                             let q = gb + gz * z as Real;
                             let s2 = q.norm_squared();
                             if s2 < 1.0 {
@@ -132,8 +136,8 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
                     }
                 }
             }
-            let mut fo = Box::new([0f32; LEAF_SIZE]);
-            let mut vo = Box::new([[0f32; 3]; LEAF_SIZE]);
+            let mut fo = [0f32; LEAF_SIZE];
+            let mut vo = [[0f32; 3]; LEAF_SIZE];
             for n in 0..LEAF_SIZE {
                 fo[n] = f[n] as f32;
                 if f[n] > 0.0 {
@@ -160,5 +164,46 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
         voxel: h,
         blocks,
         index,
+    }
+}
+
+/// Inside/outside (f ≥ f_iso) of every voxel of the density blocks, one bit per voxel: what the
+/// later stages need once the band is seeded, at 1/128 of the field's memory.
+#[derive(Default)]
+pub struct SignField {
+    /// block origins and their inside masks (bit n of word n/64)
+    pub blocks: Vec<(Key, [u64; 8])>,
+    index: FxMap<Key, usize>,
+}
+
+impl SignField {
+    /// Signs of `d` at the iso-value `iso`.
+    pub fn new(d: &DensityField, iso: f32) -> Self {
+        let blocks: Vec<(Key, [u64; 8])> = d
+            .blocks
+            .par_iter()
+            .map(|b| {
+                let mut m = [0u64; 8];
+                for n in 0..LEAF_SIZE {
+                    if b.f[n] >= iso {
+                        m[n >> 6] |= 1 << (n & 63);
+                    }
+                }
+                (b.origin, m)
+            })
+            .collect();
+        let index = blocks.iter().enumerate().map(|(i, b)| (b.0, i)).collect();
+        SignField { blocks, index }
+    }
+    /// Is voxel `ijk` inside (outside every block: no)?
+    #[inline]
+    pub fn inside(&self, ijk: Key) -> bool {
+        match self.index.get(&leaf_origin(ijk)) {
+            Some(&b) => {
+                let n = voxel_index(ijk);
+                self.blocks[b].1[n >> 6] >> (n & 63) & 1 == 1
+            }
+            None => false,
+        }
     }
 }

@@ -73,7 +73,7 @@ pub enum SurfaceError {
         count: usize,
     },
     /// The grid would be larger than the index space or the voxel budget.
-    #[error("grid too large: {voxels:.3e} voxels in the bounding box at voxel size {voxel_size} m exceeds the index range (|index| < 2^30); use a larger --voxel-size")]
+    #[error("grid too large: {voxels:.3e} voxels in the bounding box at voxel size {voxel_size} m exceeds the index range (|index| < 2^18 voxels from the origin); use a larger --voxel-size")]
     GridTooLarge {
         /// voxels in the bounding box
         voxels: f64,

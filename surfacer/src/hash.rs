@@ -16,8 +16,16 @@ impl Hasher for FxHasher {
     }
     #[inline]
     fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
+        // 8 bytes at a time ([i32; 3] keys arrive here as one 12-byte slice)
+        let mut c = bytes.chunks_exact(8);
+        for w in &mut c {
+            self.write_u64(u64::from_le_bytes(w.try_into().unwrap_or([0; 8])));
+        }
+        let r = c.remainder();
+        if !r.is_empty() {
+            let mut b = [0u8; 8];
+            b[..r.len()].copy_from_slice(r);
+            self.write_u64(u64::from_le_bytes(b));
         }
     }
     #[inline]
@@ -99,9 +107,26 @@ impl CellGrid {
         let c = cell_of(q, self.inv_h);
         let r2 = r * r;
         let m = (r * self.inv_h).ceil() as i32;
+        let h = 1.0 / self.inv_h;
+        // squared gap between q and the cell at offset d along one axis
+        let gap2 = |qa: Real, ca: i32, d: i32| -> Real {
+            let g = if d < 0 {
+                qa - (ca + d + 1) as Real * h
+            } else if d > 0 {
+                (ca + d) as Real * h - qa
+            } else {
+                0.0
+            };
+            g * g
+        };
         for dx in -m..=m {
+            let gx = gap2(q.x, c[0], dx);
             for dy in -m..=m {
+                let gy = gx + gap2(q.y, c[1], dy);
                 for dz in -m..=m {
+                    if gy + gap2(q.z, c[2], dz) > r2 {
+                        continue;
+                    }
                     if let Some(&(s, e)) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
                         let (s, e) = (s as usize, e as usize);
                         for (p, &j) in self.sorted[s..e].iter().zip(&self.order[s..e]) {

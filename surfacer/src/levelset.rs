@@ -241,14 +241,14 @@ pub struct WorkLeaf {
 
 impl WorkLeaf {
     /// A leaf whose voxels hold ±background by `inside(ijk)`.
-    pub fn new(origin: Key, bg: f32, inside: impl Fn(Key) -> bool) -> Box<Self> {
-        let mut l = Box::new(WorkLeaf {
+    pub fn new(origin: Key, bg: f32, inside: impl Fn(Key) -> bool) -> Self {
+        let mut l = WorkLeaf {
             origin,
             phi: [bg; LEAF_SIZE],
             vel: [[0.0; 3]; LEAF_SIZE],
             cp: [[0.0; 3]; LEAF_SIZE],
             set: [0; 8],
-        });
+        };
         for n in 0..LEAF_SIZE {
             if inside(voxel_of(origin, n)) {
                 l.phi[n] = -bg;
@@ -270,7 +270,7 @@ pub struct WorkGrid {
     /// background (m)
     pub bg: f32,
     /// leaves
-    pub leaves: Vec<Box<WorkLeaf>>,
+    pub leaves: Vec<WorkLeaf>,
     /// origin → index into `leaves`
     pub index: FxMap<Key, usize>,
 }

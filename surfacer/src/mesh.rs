@@ -1,13 +1,15 @@
 //! Triangle meshes and the zero-crossing extraction by marching tetrahedra.
 //!
-//! Every grid cube is split into the six tetrahedra of the Kuhn (Freudenthal) triangulation
-//! around its main diagonal, v000 → v111; this triangulation is the same from both sides of every
-//! face, so the piecewise-linear zero set it defines is a closed 2-manifold wherever the field
-//! is, with no ambiguous cases (unlike marching cubes' 33 configurations). Voxels with φ = 0 count
+//! Every grid cube is split into five tetrahedra (a central one and four corner ones), mirrored on
+//! cubes of odd parity; neighbouring cubes then cut every shared face along the same diagonal, so
+//! the piecewise-linear zero set is a closed 2-manifold wherever the field is, with no ambiguous
+//! cases (unlike marching cubes' 33 configurations). (The six-tetrahedra Kuhn split works too but
+//! gives ~20 % more triangles.) Voxels with φ = 0 count
 //! as outside. A surface vertex is identified by its grid edge (lower corner, direction), so
 //! vertices shared between cubes and leaves are merged exactly. Vertex velocities are the
 //! linear interpolation of the voxel velocities along the edge; normals are area-weighted
-//! triangle normals.
+//! triangle normals. Vertices are held as f32 while merging (the PLY stores f32 anyway).
+use crate::hash::FxMap;
 use crate::levelset::{leaf_origin, voxel_index, Leaf, LevelSet, LEAF_DIM};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
@@ -168,14 +170,22 @@ impl Nbhd<'_> {
     }
 }
 
-/// Kuhn triangulation: the six tetrahedra (as cube-corner bit masks x=4, y=2, z=1).
-const TETS: [[u8; 4]; 6] = [
-    [0, 4, 6, 7],
-    [0, 4, 5, 7],
-    [0, 2, 6, 7],
-    [0, 2, 3, 7],
-    [0, 1, 5, 7],
-    [0, 1, 3, 7],
+/// Five-tetrahedra split of a cube (corner bit masks x=4, y=2, z=1): a central tetrahedron and
+/// four corner ones, mirrored on cubes of odd parity (i+j+k odd) so that neighbouring cubes cut
+/// every shared face along the same diagonal (a conforming triangulation of the lattice).
+const TETS_EVEN: [[u8; 4]; 5] = [
+    [1, 2, 4, 7],
+    [0, 1, 2, 4],
+    [3, 1, 2, 7],
+    [5, 1, 4, 7],
+    [6, 2, 4, 7],
+];
+const TETS_ODD: [[u8; 4]; 5] = [
+    [0, 3, 5, 6],
+    [1, 0, 3, 5],
+    [2, 0, 3, 6],
+    [4, 0, 5, 6],
+    [7, 3, 5, 6],
 ];
 
 #[inline]
@@ -184,13 +194,15 @@ fn corner(c: u8) -> [i32; 3] {
 }
 
 #[inline]
-fn edge_key(g: [i32; 3], dir: u8) -> u128 {
-    let p = |x: i32| (x as i64 + (1i64 << 31)) as u128;
-    p(g[0]) << 67 | p(g[1]) << 35 | p(g[2]) << 3 | dir as u128
+fn edge_key(g: [i32; 3], d: [i32; 3]) -> u64 {
+    // 19 bits per coordinate: |index| < 2^18 (checked in `pipeline`); direction in 5 bits
+    let p = |x: i32| ((x as i64 + (1i64 << 18)) as u64) & 0x7_FFFF;
+    let dir = ((d[0] + 1) * 9 + (d[1] + 1) * 3 + (d[2] + 1)) as u64;
+    p(g[0]) << 43 | p(g[1]) << 24 | p(g[2]) << 5 | dir
 }
 
 /// One block's vertices (edge key, position, velocity) and triangles (local indices).
-type BlockMesh = (Vec<(u128, Vec3, Vec3)>, Vec<[u32; 3]>);
+type BlockMesh = (Vec<(u64, [f32; 3], [f32; 3])>, Vec<[u32; 3]>);
 
 /// Extracts the zero crossing of `ls` as a triangle mesh.
 pub fn marching_tets(ls: &LevelSet) -> TriMesh {
@@ -228,8 +240,10 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                 nb.leaves[s] = ls.leaf(lo);
                 nb.tile[s] = ls.value(lo);
             }
-            let mut verts: Vec<(u128, Vec3, Vec3)> = Vec::new();
-            let mut tris: Vec<[u128; 3]> = Vec::new();
+            let mut verts: Vec<(u64, [f32; 3], [f32; 3])> = Vec::new();
+            let mut tris: Vec<[u32; 3]> = Vec::new();
+            // edge key → local vertex index (each edge is shared by up to six tetrahedra)
+            let mut local: FxMap<u64, u32> = FxMap::default();
             if nb.leaves.iter().all(|l| l.is_none())
                 && nb.tile.iter().all(|&t| (t < 0.0) == (nb.tile[0] < 0.0))
             {
@@ -249,11 +263,23 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                             continue;
                         }
                         let g = [o[0] + x, o[1] + y, o[2] + z];
-                        let mut vertex = |a: u8, b: u8| -> (u128, Vec3) {
-                            let (a, b) = if a < b { (a, b) } else { (b, a) };
+                        let mut vertex = |a: u8, b: u8| -> (u32, Vec3) {
+                            // canonical direction: from the lexicographically lower corner
+                            let (a, b) = if corner(a) < corner(b) {
+                                (a, b)
+                            } else {
+                                (b, a)
+                            };
                             let ca = corner(a);
                             let ga = [g[0] + ca[0], g[1] + ca[1], g[2] + ca[2]];
-                            let key = edge_key(ga, b & !a);
+                            let cb0 = corner(b);
+                            let key =
+                                edge_key(ga, [cb0[0] - ca[0], cb0[1] - ca[1], cb0[2] - ca[2]]);
+                            let v64 =
+                                |q: [f32; 3]| Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
+                            if let Some(&i) = local.get(&key) {
+                                return (i, v64(verts[i as usize].1));
+                            }
                             let (pa, va) = val[a as usize];
                             let (pb, vb) = val[b as usize];
                             let t = (pa as Real / (pa as Real - pb as Real)).clamp(0.0, 1.0);
@@ -267,28 +293,40 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                             let p = (xa + t * d) * h;
                             let v =
                                 |q: [f32; 3]| Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
-                            verts.push((key, p, v(va) * (1.0 - t) + v(vb) * t));
-                            (key, p)
+                            let i = verts.len() as u32;
+                            let u = v(va) * (1.0 - t) + v(vb) * t;
+                            let p32 = [p.x as f32, p.y as f32, p.z as f32];
+                            verts.push((key, p32, [u.x as f32, u.y as f32, u.z as f32]));
+                            local.insert(key, i);
+                            (i, v64(p32))
                         };
                         let cv = |c: u8| {
                             let d = corner(c);
                             Vec3::new(d[0] as Real, d[1] as Real, d[2] as Real)
                         };
-                        for tet in TETS {
-                            let ins: Vec<u8> = tet
-                                .iter()
-                                .copied()
-                                .filter(|&c| mask >> c & 1 == 1)
-                                .collect();
-                            let out: Vec<u8> = tet
-                                .iter()
-                                .copied()
-                                .filter(|&c| mask >> c & 1 == 0)
-                                .collect();
+                        let tets = if (g[0] + g[1] + g[2]) & 1 == 0 {
+                            &TETS_EVEN
+                        } else {
+                            &TETS_ODD
+                        };
+                        for &tet in tets {
+                            let (mut ins, mut ni, mut out, mut no) = ([0u8; 4], 0, [0u8; 4], 0);
+                            for c in tet {
+                                if mask >> c & 1 == 1 {
+                                    ins[ni] = c;
+                                    ni += 1;
+                                } else {
+                                    out[no] = c;
+                                    no += 1;
+                                }
+                            }
+                            if ni == 0 || no == 0 {
+                                continue;
+                            }
                             // outward direction: from the inside corners to the outside ones
-                            let dir = out.iter().map(|&c| cv(c)).sum::<Vec3>() / out.len() as Real
-                                - ins.iter().map(|&c| cv(c)).sum::<Vec3>() / ins.len() as Real;
-                            let mut emit = |a: (u128, Vec3), b: (u128, Vec3), c: (u128, Vec3)| {
+                            let dir = out[..no].iter().map(|&c| cv(c)).sum::<Vec3>() / no as Real
+                                - ins[..ni].iter().map(|&c| cv(c)).sum::<Vec3>() / ni as Real;
+                            let mut emit = |a: (u32, Vec3), b: (u32, Vec3), c: (u32, Vec3)| {
                                 let n = (b.1 - a.1).cross(&(c.1 - a.1));
                                 if n.dot(&dir) >= 0.0 {
                                     tris.push([a.0, b.0, c.0]);
@@ -296,9 +334,9 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                                     tris.push([a.0, c.0, b.0]);
                                 }
                             };
-                            match ins.len() {
+                            match ni {
                                 1 | 3 => {
-                                    let (apex, rest) = if ins.len() == 1 {
+                                    let (apex, rest) = if ni == 1 {
                                         (ins[0], [out[0], out[1], out[2]])
                                     } else {
                                         (out[0], [ins[0], ins[1], ins[2]])
@@ -323,16 +361,8 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                     }
                 }
             }
-            // merge the vertices emitted several times inside this block (one per tetrahedron)
-            verts.sort_unstable_by_key(|v| v.0);
-            verts.dedup_by_key(|v| v.0);
             verts.shrink_to_fit();
-            let local = |k: u128| -> u32 {
-                verts
-                    .binary_search_by_key(&k, |v| v.0)
-                    .expect("vertex emitted with its triangle") as u32
-            };
-            let tris: Vec<[u32; 3]> = tris.iter().map(|t| t.map(local)).collect();
+            tris.shrink_to_fit();
             (verts, tris)
         })
         .collect();
@@ -341,7 +371,7 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     let nt: usize = parts.iter().map(|p| p.1.len()).sum();
     let mut flat_pos = Vec::with_capacity(nv);
     let mut flat_vel = Vec::with_capacity(nv);
-    let mut keys: Vec<(u128, u32)> = Vec::with_capacity(nv);
+    let mut keys: Vec<(u64, u32)> = Vec::with_capacity(nv);
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(nt);
     for (v, t) in parts {
         let off = flat_pos.len() as u32;
@@ -359,8 +389,10 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     let mut s = 0;
     while s < keys.len() {
         let id = pos.len() as u32;
-        pos.push(flat_pos[keys[s].1 as usize]);
-        vel.push(flat_vel[keys[s].1 as usize]);
+        let (p, u): ([f32; 3], [f32; 3]) =
+            (flat_pos[keys[s].1 as usize], flat_vel[keys[s].1 as usize]);
+        pos.push(Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real));
+        vel.push(Vec3::new(u[0] as Real, u[1] as Real, u[2] as Real));
         let mut e = s;
         while e < keys.len() && keys[e].0 == keys[s].0 {
             remap[keys[e].1 as usize] = id;

@@ -129,7 +129,7 @@ pub struct FrameStats {
     pub leaves: usize,
     /// active voxels
     pub active_voxels: usize,
-    /// peak bytes of the grids built for this frame (density + band)
+    /// bytes of the grids built for this frame (density field + band, not at the same time)
     pub grid_bytes: usize,
     /// triangles of the level-set mesh
     pub triangles: usize,
@@ -174,7 +174,7 @@ pub fn surface_particles(
     st.voxel = h;
     // index range check
     let ext = frame.pos.iter().fold(0.0f64, |m, p| m.max(p.amax()));
-    if ext / h > (1u64 << 30) as Real {
+    if ext / h > ((1u64 << 18) - 64) as Real {
         return Err(SurfaceError::GridTooLarge {
             voxels: (ext / h).powi(3),
             voxel_size: h,
@@ -192,21 +192,25 @@ pub fn surface_particles(
         .map(|&i| 4.0 / 3.0 * std::f64::consts::PI * frame.pscale[i].powi(3))
         .collect();
     let kernels = build_kernels(&vpos, &vvol, dx, &o.aniso);
+    drop(vpos);
+    let target: Real = vvol.iter().sum();
+    drop(vvol);
     st.isotropic_kernels = kernels.isotropic;
     st.seconds[0] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let dens = crate::density::rasterize(&kernels, &vvel, h);
+    drop(vvel);
     drop(kernels);
     st.density_blocks = dens.blocks.len();
+    let dens_bytes = dens.memory_bytes();
     st.seconds[1] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let (mut grid, extra_inside, info): (WorkGrid, _, _) = redistance(&dens, iso, band);
+    let (mut grid, extra_inside, signs, info): (WorkGrid, _, _, _) = redistance(dens, iso, band);
     st.redistance = info;
     if o.conserve_volume && !vi.is_empty() {
-        let target: Real = vvol.iter().sum();
-        st.volume_shift = crate::redistance::conserve_volume(&mut grid, &dens, iso, target, band);
+        st.volume_shift = crate::redistance::conserve_volume(&mut grid, &signs, target, band);
     }
     st.seconds[2] = t.elapsed().as_secs_f64();
 
@@ -217,11 +221,11 @@ pub fn surface_particles(
     let tubes = tube_prims(frame, &chains, h, &o.filaments);
     let mut prims = disks.clone();
     prims.extend_from_slice(&tubes);
-    let inside = |ijk| dens.f(ijk) >= iso;
+    let inside = |ijk| signs.inside(ijk);
     grid.union_prims(&prims, &inside);
     st.grid_bytes =
-        dens.memory_bytes() + grid.leaves.len() * std::mem::size_of::<crate::levelset::WorkLeaf>();
-    drop(dens);
+        dens_bytes + grid.leaves.len() * std::mem::size_of::<crate::levelset::WorkLeaf>();
+    drop(signs);
     let ls = grid.finish(extra_inside);
     st.leaves = ls.leaves.len();
     st.active_voxels = ls.active_count();

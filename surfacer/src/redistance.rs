@@ -12,7 +12,7 @@
 //!    independent of the thread count. Propagation stops past the band.
 //!
 //! The sign of every voxel comes from f itself, so inside never depends on the propagation.
-use crate::density::DensityField;
+use crate::density::{DensityField, SignField};
 use crate::hash::Key;
 use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, LEAF_SIZE};
 use crate::{Real, Vec3};
@@ -33,12 +33,16 @@ type Entry = (Key, f32, [f32; 3], [f32; 3]);
 /// A propagated voxel: (index in leaf, φ, closest point, velocity).
 type Update = (usize, f32, [f32; 3], [f32; 3]);
 
-/// Builds the band of half width `band`·Δx around f = `iso`. Returns the grid, the origins of
-/// density blocks entirely inside that are not in the band, and counts.
-pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>, RedistanceInfo) {
+/// Builds the band of half width `band`·Δx around f = `iso`. The field is consumed once the seeds
+/// are taken (only its signs are kept). Returns the grid, the origins of density blocks entirely
+/// inside that are not in the band, the signs, and counts.
+pub fn redistance(
+    d: DensityField,
+    iso: f32,
+    band: Real,
+) -> (WorkGrid, Vec<Key>, SignField, RedistanceInfo) {
     let h = d.voxel;
     let bg = (band * h) as f32;
-    let inside = |ijk: Key| d.f(ijk) >= iso;
     let world = |k: Key| Vec3::new(k[0] as Real, k[1] as Real, k[2] as Real) * h;
     let mut info = RedistanceInfo::default();
 
@@ -61,7 +65,12 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                     for (si, s) in [-1i32, 1].into_iter().enumerate() {
                         let mut nb = ijk;
                         nb[a] += s;
-                        let fnb = d.f(nb);
+                        // same block: direct index; otherwise a lookup
+                        let fnb = if (nb[a] & !7) == b.origin[a] {
+                            b.f[voxel_index(nb)]
+                        } else {
+                            d.f(nb)
+                        };
                         fs[si] = fnb;
                         if (fnb >= iso) != ins {
                             let t = ((f - iso) as Real / (f - fnb) as Real).clamp(0.0, 1.0);
@@ -103,6 +112,9 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
         })
         .collect();
     info.seeds = seeds.len();
+    let signs = SignField::new(&d, iso);
+    drop(d);
+    let inside = |ijk: Key| signs.inside(ijk);
     info.flat_gradient = seeds.iter().filter(|s| s.1).count();
 
     let mut grid = WorkGrid::new(h, bg);
@@ -205,29 +217,15 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                     let j = nb[(s(k[0]) * 9 + s(k[1]) * 3 + s(k[2])) as usize]?;
                     Some((j, voxel_index([k[0] & 7, k[1] & 7, k[2] & 7])))
                 };
+                // candidates: the front dilated by one voxel (26-neighbourhood), minus set voxels
+                let front_of = |s: usize| -> [u64; 8] { nb[s].map_or([0; 8], |j| fr[j]) };
+                let dil = dilate26(&front_of);
                 let mut out = Vec::new();
                 for n in 0..LEAF_SIZE {
-                    if leaf.is_set(n) {
+                    if dil[n >> 6] >> (n & 63) & 1 == 0 || leaf.is_set(n) {
                         continue;
                     }
                     let k = voxel_of([0, 0, 0], n);
-                    // cheap test first: is any 26-neighbour in the front?
-                    let mut near_front = false;
-                    'scan: for dx in -1..=1 {
-                        for dy in -1..=1 {
-                            for dz in -1..=1 {
-                                if let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) {
-                                    if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
-                                        near_front = true;
-                                        break 'scan;
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    if !near_front {
-                        continue;
-                    }
                     let mut best = (Real::INFINITY, 0usize, 0usize);
                     let x = world([o[0] + k[0], o[1] + k[1], o[2] + k[2]]);
                     for dx in -1..=1 {
@@ -249,7 +247,7 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
                         }
                     }
                     best.0 = best.0.sqrt();
-                    if !near_front || best.0 > limit {
+                    if best.0 > limit {
                         continue;
                     }
                     let s = if inside([o[0] + k[0], o[1] + k[1], o[2] + k[2]]) {
@@ -282,16 +280,16 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
         }
     }
 
-    let extra_inside: Vec<Key> = d
+    let extra_inside: Vec<Key> = signs
         .blocks
         .par_iter()
         .filter(|b| {
-            !grid.index.contains_key(&b.origin)
-                && b.f.iter().filter(|&&f| f >= iso).count() * 2 > LEAF_SIZE
+            !grid.index.contains_key(&b.0)
+                && b.1.iter().map(|w| w.count_ones() as usize).sum::<usize>() * 2 > LEAF_SIZE
         })
-        .map(|b| b.origin)
+        .map(|b| b.0)
         .collect();
-    (grid, extra_inside, info)
+    (grid, extra_inside, signs, info)
 }
 
 /// Volume-preserving offset. Centre smoothing (λ) and flattened surface kernels pull the
@@ -299,13 +297,7 @@ pub fn redistance(d: &DensityField, iso: f32, band: Real) -> (WorkGrid, Vec<Key>
 /// restore the particles' total volume V_p: with the grid's enclosed volume V(φ) and surface area
 /// A(φ), both from a smeared Heaviside of width ε = 1.5 Δx (V = Δx³ Σ H(−φ), A = Δx³ Σ δ(φ)),
 /// every band value is shifted by d = (V(φ) − V_p)/A, clamped to ±band/2. Returns the shift (m).
-pub fn conserve_volume(
-    grid: &mut WorkGrid,
-    d: &DensityField,
-    iso: f32,
-    target: Real,
-    band: Real,
-) -> Real {
+pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, band: Real) -> Real {
     let h = grid.voxel;
     let eps = 1.5 * h;
     let heav = |x: Real| {
@@ -325,11 +317,11 @@ pub fn conserve_volume(
         }
     };
     let h3 = h * h * h;
-    let interior = d
+    let interior = signs
         .blocks
         .par_iter()
-        .filter(|b| !grid.index.contains_key(&b.origin))
-        .map(|b| b.f.iter().filter(|&&f| f >= iso).count() as Real)
+        .filter(|b| !grid.index.contains_key(&b.0))
+        .map(|b| b.1.iter().map(|w| w.count_ones() as Real).sum::<Real>())
         .sum::<Real>();
     // V(s), A(s) of the shifted field φ + s
     let eval = |s: Real| {
@@ -368,4 +360,96 @@ pub fn conserve_volume(
         }
     });
     shift
+}
+
+const Z0: u64 = 0x0101_0101_0101_0101;
+const Z7: u64 = 0x8080_8080_8080_8080;
+
+/// Dilates a leaf's voxel mask by one voxel in all 26 directions, including the contributions of
+/// the 26 neighbouring leaves. `mask(s)` gives the mask of the neighbour at slot
+/// s = (dx+1)·9 + (dy+1)·3 + (dz+1). Leaf layout: word x, bit 8y + z.
+fn dilate26(mask: &impl Fn(usize) -> [u64; 8]) -> [u64; 8] {
+    let slot = |dx: i32, dy: i32, dz: i32| ((dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)) as usize;
+    // z-dilation of the 9 leaves (dx, dy, 0), taking bits across the z faces
+    let mut zd = [[0u64; 8]; 9];
+    for dx in -1..=1 {
+        for dy in -1..=1 {
+            let (c, lo, hi) = (
+                mask(slot(dx, dy, 0)),
+                mask(slot(dx, dy, -1)),
+                mask(slot(dx, dy, 1)),
+            );
+            for x in 0..8 {
+                let w = c[x];
+                zd[((dx + 1) * 3 + dy + 1) as usize][x] = w
+                    | ((w << 1) & !Z0)
+                    | ((w >> 1) & !Z7)
+                    | ((lo[x] & Z7) >> 7)
+                    | ((hi[x] & Z0) << 7);
+            }
+        }
+    }
+    // y-dilation of the 3 leaves (dx, 0, 0)
+    let mut yd = [[0u64; 8]; 3];
+    for dx in 0..3 {
+        let (c, lo, hi) = (zd[dx * 3 + 1], zd[dx * 3], zd[dx * 3 + 2]);
+        for x in 0..8 {
+            let w = c[x];
+            yd[dx][x] = w | (w << 8) | (w >> 8) | (lo[x] >> 56) | (hi[x] << 56);
+        }
+    }
+    // x-dilation of the centre leaf
+    let mut out = [0u64; 8];
+    for x in 0..8 {
+        let prev = if x == 0 { yd[0][7] } else { yd[1][x - 1] };
+        let next = if x == 7 { yd[2][0] } else { yd[1][x + 1] };
+        out[x] = yd[1][x] | prev | next;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bit_dilation_matches_brute_force() {
+        // one voxel per neighbour leaf at pseudo-random places, plus some in the centre
+        let mut masks = [[0u64; 8]; 27];
+        let mut s = 7u64;
+        for m in masks.iter_mut() {
+            for _ in 0..6 {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let n = (s >> 33) as usize % 512;
+                m[n >> 6] |= 1 << (n & 63);
+            }
+        }
+        let got = dilate26(&|i| masks[i]);
+        for n in 0..512 {
+            let k = voxel_of([0, 0, 0], n);
+            let mut want = false;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let q = [k[0] + dx, k[1] + dy, k[2] + dz];
+                        let sl = |v: i32| {
+                            if v < 0 {
+                                0
+                            } else if v > 7 {
+                                2
+                            } else {
+                                1
+                            }
+                        };
+                        let m = masks[(sl(q[0]) * 9 + sl(q[1]) * 3 + sl(q[2])) as usize];
+                        let qi = voxel_index([q[0] & 7, q[1] & 7, q[2] & 7]);
+                        want |= m[qi >> 6] >> (qi & 63) & 1 == 1;
+                    }
+                }
+            }
+            assert_eq!(got[n >> 6] >> (n & 63) & 1 == 1, want, "voxel {k:?}");
+        }
+    }
 }

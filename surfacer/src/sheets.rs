@@ -4,7 +4,8 @@
 //! radius is `overlap` × the distance to its `k_spacing`-th nearest sheet neighbour, so that
 //! neighbouring disks overlap without holes (a square lattice of spacing s needs r > s/√2, a
 //! hexagonal one r > s/√3; the 4th neighbour of either is at s). Its thickness is
-//! mass / (ρ · π r²), clamped below by `min_thickness_voxels` · Δx so the grid resolves it.
+//! mass / (ρ · s²) — the particle's own share s² of the sheet's area, not the overlapping disk's —
+//! clamped below by `min_thickness_voxels` · Δx so the grid resolves it.
 //! A sheet particle without neighbours gets the disk of its own volume at thickness 2·pscale.
 //! The disks are rounded (a disk of radius r − t/2 swept by a ball of radius t/2), whose signed
 //! distance is exact (see [`Prim::Disk`]).
@@ -78,13 +79,16 @@ pub fn sheet_disks(frame: &ParticleFrame, voxel: Real, p: &SheetParams) -> Vec<(
             } else {
                 Vec3::z()
             };
-            let r = if d.is_empty() {
-                (frame.mass[i] / (p.density * std::f64::consts::PI * 2.0 * frame.pscale[i])).sqrt()
+            // local spacing s and the particle's share of the sheet's area, s²
+            let (r, area) = if d.is_empty() {
+                let a = frame.mass[i] / (p.density * 2.0 * frame.pscale[i]);
+                ((a / std::f64::consts::PI).sqrt(), a)
             } else {
-                p.overlap * d[(p.k_spacing.max(1) - 1).min(d.len() - 1)]
+                let s = d[(p.k_spacing.max(1) - 1).min(d.len() - 1)];
+                (p.overlap * s, s * s)
             };
             let r = r.max(0.5 * voxel);
-            let thick = frame.mass[i] / (p.density * std::f64::consts::PI * r * r);
+            let thick = frame.mass[i] / (p.density * area);
             let t = 0.5 * thick.max(p.min_thickness_voxels * voxel);
             (
                 Prim::Disk {

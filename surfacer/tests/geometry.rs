@@ -198,3 +198,87 @@ fn helix_filament_is_one_connected_tube() {
         assert!(g.levelset.sample(&f.pos[i]) < 0.0);
     }
 }
+
+#[test]
+fn anisotropic_kernels_give_a_flatter_free_surface_than_isotropic() {
+    // a jittered slab 24Δ × 24Δ × 6Δ: its top face should be a plane
+    let dx = 0.05;
+    let mut f = ParticleFrame::default();
+    let mut s = 99u64;
+    for i in 0..24 {
+        for j in 0..24 {
+            for k in 0..6 {
+                let mut jit = || (rand01(&mut s) - 0.5) * 0.3 * dx;
+                let p = Vec3::new(
+                    i as Real * dx + jit(),
+                    j as Real * dx + jit(),
+                    k as Real * dx + jit(),
+                );
+                let id = f.len() as u32;
+                f.push(
+                    p,
+                    Vec3::zeros(),
+                    id,
+                    0,
+                    pscale_of(dx),
+                    RHO * dx.powi(3),
+                    Vec3::zeros(),
+                );
+            }
+        }
+    }
+    let top_rms = |aniso: bool| {
+        let mut o = SurfaceOptions::default();
+        o.aniso.anisotropic = aniso;
+        let g = surface_particles(&f, &o).unwrap();
+        let z: Vec<Real> = g
+            .mesh
+            .pos
+            .iter()
+            .filter(|p| {
+                p.z > 3.0 * dx
+                    && (4.0 * dx..19.0 * dx).contains(&p.x)
+                    && (4.0 * dx..19.0 * dx).contains(&p.y)
+            })
+            .map(|p| p.z)
+            .collect();
+        let mean = z.iter().sum::<Real>() / z.len() as Real;
+        let rms = (z.iter().map(|v| (v - mean).powi(2)).sum::<Real>() / z.len() as Real).sqrt();
+        (rms / g.stats.voxel, mean)
+    };
+    let (ra, ma) = top_rms(true);
+    let (ri, mi) = top_rms(false);
+    eprintln!("top face rms: anisotropic {ra:.3} voxels (z̄ {ma:.4}), isotropic {ri:.3} voxels (z̄ {mi:.4})");
+    assert!(ra < ri, "anisotropic {ra} vs isotropic {ri}");
+    assert!(ra < 0.1, "anisotropic top face rms {ra} voxels");
+    // volume conservation puts both top faces half a spacing above the last layer (z = 5.5 Δ)
+    assert!((ma - 5.5 * dx).abs() < 0.1 * dx && (mi - 5.5 * dx).abs() < 0.1 * dx);
+}
+
+#[test]
+fn sheet_disks_get_the_sheets_thickness_from_mass() {
+    // thick sheet (6 voxels) so the clamp does not act: slab thickness = mass / (ρ s²)
+    let mut f = ParticleFrame::default();
+    let (ds, th) = (0.02, 0.06);
+    flat_sheet(&mut f, 0.0, 0.3, ds, th);
+    ball(
+        &mut f,
+        Vec3::new(2.0, 0.0, 0.0),
+        0.05,
+        0.02,
+        0.0,
+        Vec3::zeros(),
+    );
+    let g = surface_particles(&f, &SurfaceOptions::default()).unwrap();
+    let h = g.stats.voxel;
+    // φ along the normal through the centre crosses zero at ±th/2
+    let z0 = (1..60)
+        .map(|k| k as Real * 0.1 * h)
+        .find(|&z| g.levelset.sample(&Vec3::new(0.0, 0.0, z)) > 0.0)
+        .unwrap();
+    assert!(
+        (z0 - 0.5 * th).abs() < 0.3 * h,
+        "half thickness {z0} vs {}",
+        0.5 * th
+    );
+}

@@ -172,7 +172,7 @@ fn run_splashsurf(bin: &Path, f: &ParticleFrame, radius: f64, dir: &Path) -> Res
         .arg("reconstruct")
         .arg(&input)
         .arg("-o")
-        .arg(dir.join("blob.obj"))
+        .arg(dir.join("blob.ply"))
         .arg(format!("--particle-radius={radius}"))
         .arg("--smoothing-length=2.0")
         .arg("--cube-size=1.0")
