@@ -35,10 +35,18 @@ pub fn voronoi_area(xp: &Vec3, frame: &Mat3, nbrs: impl Iterator<Item = Vec3>, h
     // inside a sheet the bisectors cut much closer (≤ 0.58 × on a hexagonal,
     // 0.5 × on a square lattice), but at an open edge the cell would extend
     // to the search square and give the particle up to 4 h² of area
-    let mut d: Vec<Real> = nbrs.iter().map(|q| (q - xp).norm()).filter(|d| *d > 0.0).collect();
+    let mut d: Vec<Real> = nbrs
+        .iter()
+        .map(|q| (q - xp).norm())
+        .filter(|d| *d > 0.0)
+        .collect();
     d.sort_by(|a, b| a.partial_cmp(b).unwrap());
     let k = d.len().min(6);
-    let half = if k > 0 { (0.75 * d[..k].iter().sum::<Real>() / k as Real).min(h) } else { h };
+    let half = if k > 0 {
+        (0.75 * d[..k].iter().sum::<Real>() / k as Real).min(h)
+    } else {
+        h
+    };
     let mut poly: Vec<[Real; 2]> = vec![[-half, -half], [half, -half], [half, half], [-half, half]];
     let mut clipped = false;
     for q in nbrs {

@@ -229,10 +229,16 @@ mod tests {
         let normals: Vec<Vec3> = x.iter().map(|p| (p - c).normalize()).collect();
         let area = vec![1.0; x.len()];
         let (cf, rf) = fit_sphere(&x, &normals, &area).unwrap();
-        assert!((rf - r).abs() < 1e-12 && (cf - c).norm() < 1e-12, "{rf} {cf}");
+        assert!(
+            (rf - r).abs() < 1e-12 && (cf - c).norm() < 1e-12,
+            "{rf} {cf}"
+        );
         // the divergence-theorem volume of the open cap is far from the sphere's
         let v = enclosed_volume(&x, &normals, &area);
-        assert!(v < 0.9 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) * x.len() as Real / n as Real * 1e9);
+        assert!(
+            v < 0.9 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) * x.len() as Real / n as Real
+                * 1e9
+        );
     }
 
     #[test]

@@ -319,7 +319,9 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
     if prm.light_fraction <= 0.0 {
         return 0;
     }
-    let idx: Vec<usize> = (0..parts.len()).filter(|&i| parts.codim[i] == kind).collect();
+    let idx: Vec<usize> = (0..parts.len())
+        .filter(|&i| parts.codim[i] == kind)
+        .collect();
     if idx.len() < 2 {
         return 0;
     }
@@ -347,7 +349,8 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
         if parts.mass[p] < prm.light_fraction * sum / cnt as Real {
             let m = parts.mass[p] + parts.mass[q];
             parts.v[q] = (parts.v[q] * parts.mass[q] + parts.v[p] * parts.mass[p]) / m;
-            parts.radius[q] = (parts.radius[q] * parts.mass[q] + parts.radius[p] * parts.mass[p]) / m;
+            parts.radius[q] =
+                (parts.radius[q] * parts.mass[q] + parts.radius[p] * parts.mass[p]) / m;
             parts.mass[q] = m;
             alive[p] = false;
             n += 1;
@@ -368,7 +371,9 @@ fn absorb_into_rims(parts: &mut Particles, prm: &ReseedParams) -> u64 {
     if r <= 0.0 {
         return 0;
     }
-    let fil: Vec<usize> = (0..parts.len()).filter(|&i| parts.codim[i] == Codim::Filament).collect();
+    let fil: Vec<usize> = (0..parts.len())
+        .filter(|&i| parts.codim[i] == Codim::Filament)
+        .collect();
     if fil.is_empty() {
         return 0;
     }
@@ -443,7 +448,8 @@ pub fn reseed<'a>(
         ..Default::default()
     };
     c.absorbed = absorb_into_rims(parts, prm);
-    c.light_merged = merge_light(parts, Codim::Sheet, prm) + merge_light(parts, Codim::Filament, prm);
+    c.light_merged =
+        merge_light(parts, Codim::Sheet, prm) + merge_light(parts, Codim::Filament, prm);
     c.sheet_removed = remove_close(parts, Codim::Sheet, prm);
     c.filament_removed = remove_close(parts, Codim::Filament, prm);
     c

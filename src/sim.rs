@@ -10,14 +10,14 @@
 //! precision, `resume` continues from the last complete frame bit for bit.
 //! A stop flag (Ctrl-C in the binary) is checked after every frame.
 
+use crate::film::driver as film_driver;
+use crate::film::{FilmParams, FilmState};
 use crate::grid::MacGrid;
 use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed, SubstepRecord};
 use crate::io::ply::{self, frame_name, PlyError};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
-use crate::film::driver as film_driver;
-use crate::film::{FilmParams, FilmState};
 use crate::scene::{self, sample_bodies, sample_films, Scene, SceneError, Transfer};
 use crate::solids::SolidSet;
 use crate::step::{cfl_dt, step, SimState, StageTimes, StepError, StepParams};
@@ -298,7 +298,10 @@ impl Sim {
         manifest.frames.push(base_record(0, 0.0, &particles));
         manifest.write(&mpath)?;
         let film = film_only.then(|| {
-            (film_driver::params_from_scene(&scene), film_driver::initial_state(&scene))
+            (
+                film_driver::params_from_scene(&scene),
+                film_driver::initial_state(&scene),
+            )
         });
         Ok(Sim {
             scene,
@@ -336,7 +339,11 @@ impl Sim {
                 &mut rec,
                 &mut times,
             )
-            .map_err(|source| SimError::Film { frame: f, time: self.time, source })?;
+            .map_err(|source| SimError::Film {
+                frame: f,
+                time: self.time,
+                source,
+            })?;
             self.time = t_end;
             substeps = n;
             dt_min = lo;
@@ -357,13 +364,14 @@ impl Sim {
                 } else if dt > 0.5 * rem {
                     dt = 0.5 * rem;
                 }
-                let info = step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
-                    SimError::Step {
-                        frame: f,
-                        time: self.time,
-                        source,
-                    }
-                })?;
+                let info =
+                    step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
+                        SimError::Step {
+                            frame: f,
+                            time: self.time,
+                            source,
+                        }
+                    })?;
                 self.time = if last { t_end } else { self.time + dt };
                 substeps += 1;
                 dt_min = dt_min.min(dt);
@@ -392,7 +400,10 @@ impl Sim {
         let p = &self.state.particles;
         let affine =
             (self.params.transfer == Transfer::Apic).then_some(self.state.affine.as_slice());
-        let fv = self.film.as_ref().map(|_| film_driver::frame_vectors(p, self.scene.domain.dx));
+        let fv = self
+            .film
+            .as_ref()
+            .map(|_| film_driver::frame_vectors(p, self.scene.domain.dx));
         let bytes = ply::encode(p, fv.as_deref(), affine, f, self.time)?;
         let path = self.dir.join(frame_name(f));
         write_atomic(&path, &bytes).map_err(io_err(&path))?;

@@ -80,7 +80,17 @@ pub fn filament_role(
 /// component along the rim tangent (b¹ of the filament frame, `frame`
 /// column 0) removed — the same vector, without depending on how PCA orders
 /// two nearly equal eigenvalues.
-pub fn rim_force(p: usize, frame: &Mat3, x: &[Vec3], codim: &[Codim], nbrs: &[u32], sigma: Real, s_rim: Real, r: Real, modulation: Real) -> Vec3 {
+pub fn rim_force(
+    p: usize,
+    frame: &Mat3,
+    x: &[Vec3],
+    codim: &[Codim],
+    nbrs: &[u32],
+    sigma: Real,
+    s_rim: Real,
+    r: Real,
+    modulation: Real,
+) -> Vec3 {
     let mut c = Vec3::zeros();
     let mut n = 0;
     for &q in nbrs {

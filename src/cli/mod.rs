@@ -1,6 +1,6 @@
 //! One file per subcommand: each defines its clap `…Args` and a `run`.
 pub mod bench;
-pub mod validate;
 pub mod preview;
 pub mod sim;
 pub mod surface;
+pub mod validate;

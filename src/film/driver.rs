@@ -21,7 +21,10 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
     let h = s.domain.dx;
     let f = &s.film;
     let mut prm = FilmParams::new(h, s.physics.surface_tension);
-    prm.mls = MlsParams { order: f.order, ..prm.mls };
+    prm.mls = MlsParams {
+        order: f.order,
+        ..prm.mls
+    };
     prm.density = s.physics.density;
     prm.viscosity = s.physics.viscosity;
     let a = s.acceleration();
@@ -38,7 +41,10 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
     if !f.reseed {
         prm.reseed = None;
     }
-    prm.solver = BicgstabParams { tol: f.solver_tolerance, max_iter: f.solver_max_iterations };
+    prm.solver = BicgstabParams {
+        tol: f.solver_tolerance,
+        max_iter: f.solver_max_iterations,
+    };
     prm
 }
 
@@ -54,7 +60,10 @@ pub fn initial_state(s: &Scene) -> FilmState {
                 _ => None,
             })
             .unwrap_or(s.domain.dx);
-        GasPocket { v0: 0.0, ..GasPocket::balanced_sphere(r, s.physics.surface_tension, 0.0) }
+        GasPocket {
+            v0: 0.0,
+            ..GasPocket::balanced_sphere(r, s.physics.surface_tension, 0.0)
+        }
     });
     FilmState { gas }
 }
@@ -64,7 +73,9 @@ pub fn spacing(s: &Scene) -> Real {
     s.films
         .iter()
         .map(|b| match b {
-            FilmBody::Sphere { spacing, .. } | FilmBody::Cylinder { spacing, .. } | FilmBody::Disk { spacing, .. } => *spacing,
+            FilmBody::Sphere { spacing, .. }
+            | FilmBody::Cylinder { spacing, .. }
+            | FilmBody::Disk { spacing, .. } => *spacing,
         })
         .fold(1.0, Real::min)
         * s.domain.dx
@@ -74,10 +85,16 @@ pub fn spacing(s: &Scene) -> Real {
 /// filament particles, zero for the others.
 pub fn frame_vectors(p: &Particles, h: Real) -> Vec<Vec3> {
     let mut out = vec![Vec3::zeros(); p.len()];
-    let Ok(nb) = Neighborhoods::build(&p.x, &p.codim, h) else { return out };
+    let Ok(nb) = Neighborhoods::build(&p.x, &p.codim, h) else {
+        return out;
+    };
     let frames = par_frames(&nb, &MlsParams::new(h));
     for (j, &i) in nb.store.iter().enumerate() {
-        out[i] = if p.codim[i] == Codim::Sheet { frames[j].axis(2) } else { frames[j].axis(0) };
+        out[i] = if p.codim[i] == Codim::Sheet {
+            frames[j].axis(2)
+        } else {
+            frames[j].axis(0)
+        };
     }
     out
 }
@@ -127,11 +144,16 @@ pub fn advance(
             times.add(k, v);
         }
         for si in &info.tension_solve {
-            rec.tension.add(si.iterations as u32, si.rel_residual, si.rel_residual <= 10.0 * prm.solver.tol);
+            rec.tension.add(
+                si.iterations as u32,
+                si.rel_residual,
+                si.rel_residual <= 10.0 * prm.solver.tol,
+            );
         }
         for si in &info.viscosity_solve {
             if si.iterations > 0 {
-                rec.viscosity.add(si.iterations as u32, si.rel_residual, true);
+                rec.viscosity
+                    .add(si.iterations as u32, si.rel_residual, true);
             }
         }
         let (a, b) = (&mut rec.transitions, &info.transitions);

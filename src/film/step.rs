@@ -322,7 +322,9 @@ pub fn step(
             // gas volume from the best-fit sphere: insensitive to holes
             let v = fit_sphere(&film.x[..n_sheet], &normals, &voronoi[..n_sheet])
                 .map(|(_, r)| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3))
-                .unwrap_or_else(|| enclosed_volume(&film.x[..n_sheet], &normals, &voronoi[..n_sheet]));
+                .unwrap_or_else(|| {
+                    enclosed_volume(&film.x[..n_sheet], &normals, &voronoi[..n_sheet])
+                });
             if g.v0 <= 0.0 {
                 // rest volume measured on the first step (an open film's
                 // volume differs from the closed sphere's)

@@ -202,7 +202,13 @@ fn inside(path: String, s: &Scene, c: &[f64; 3], r: f64) -> Check {
     if (0..3).all(|k| c[k] - r >= d.min[k] && c[k] + r <= d.max[k]) {
         Ok(())
     } else {
-        fail(path, format!("film (centre {c:?}, extent {r} m) leaves the domain {:?}–{:?}", d.min, d.max))
+        fail(
+            path,
+            format!(
+                "film (centre {c:?}, extent {r} m) leaves the domain {:?}–{:?}",
+                d.min, d.max
+            ),
+        )
     }
 }
 
@@ -211,10 +217,20 @@ pub fn validate(s: &Scene) -> Check {
     for (i, b) in s.films.iter().enumerate() {
         let p = |f: &str| format!("films[{i}].{f}");
         match b {
-            FilmBody::Sphere { center, radius, hole_angle, hole_axis, velocity, spacing } => {
+            FilmBody::Sphere {
+                center,
+                radius,
+                hole_angle,
+                hole_axis,
+                velocity,
+                spacing,
+            } => {
                 pos(p("radius"), *radius)?;
                 if !(0.0..PI).contains(hole_angle) {
-                    return fail(p("hole_angle"), format!("must be in [0, π) rad, got {hole_angle}"));
+                    return fail(
+                        p("hole_angle"),
+                        format!("must be in [0, π) rad, got {hole_angle}"),
+                    );
                 }
                 dir(p("hole_axis"), hole_axis)?;
                 if !velocity.iter().all(|c| c.is_finite()) {
@@ -223,7 +239,14 @@ pub fn validate(s: &Scene) -> Check {
                 check_spacing(p("spacing"), *spacing, *radius, s)?;
                 inside(p("center"), s, center, *radius)?;
             }
-            FilmBody::Cylinder { center, axis, radius, length, ring_speed, spacing } => {
+            FilmBody::Cylinder {
+                center,
+                axis,
+                radius,
+                length,
+                ring_speed,
+                spacing,
+            } => {
                 pos(p("radius"), *radius)?;
                 pos(p("length"), *length)?;
                 dir(p("axis"), axis)?;
@@ -233,7 +256,12 @@ pub fn validate(s: &Scene) -> Check {
                 check_spacing(p("spacing"), *spacing, *radius, s)?;
                 inside(p("center"), s, center, radius.hypot(0.5 * length))?;
             }
-            FilmBody::Disk { center, normal, radius, spacing } => {
+            FilmBody::Disk {
+                center,
+                normal,
+                radius,
+                spacing,
+            } => {
                 pos(p("radius"), *radius)?;
                 dir(p("normal"), normal)?;
                 check_spacing(p("spacing"), *spacing, *radius, s)?;
@@ -244,19 +272,31 @@ pub fn validate(s: &Scene) -> Check {
     let f = &s.film;
     pos("film.thickness".into(), f.thickness)?;
     if !(f.damping.is_finite() && f.damping >= 0.0) {
-        return fail("film.damping", format!("must be >= 0 1/s, got {}", f.damping));
+        return fail(
+            "film.damping",
+            format!("must be >= 0 1/s, got {}", f.damping),
+        );
     }
     if !(2..=4).contains(&f.order) {
         return fail("film.order", format!("must be 2, 3 or 4, got {}", f.order));
     }
     if !(f.cfl.is_finite() && f.cfl > 0.0 && f.cfl <= 2.0) {
-        return fail("film.cfl", format!("must be in (0, 2] spacings, got {}", f.cfl));
+        return fail(
+            "film.cfl",
+            format!("must be in (0, 2] spacings, got {}", f.cfl),
+        );
     }
     if !(f.max_speed.is_finite() && f.max_speed >= 0.0) {
-        return fail("film.max_speed", format!("must be >= 0 m/s, got {}", f.max_speed));
+        return fail(
+            "film.max_speed",
+            format!("must be >= 0 m/s, got {}", f.max_speed),
+        );
     }
     if !(f.solver_tolerance > 0.0 && f.solver_tolerance < 1.0) {
-        return fail("film.solver_tolerance", format!("must be in (0, 1), got {}", f.solver_tolerance));
+        return fail(
+            "film.solver_tolerance",
+            format!("must be in (0, 1), got {}", f.solver_tolerance),
+        );
     }
     if f.solver_max_iterations == 0 {
         return fail("film.solver_max_iterations", "must be at least 1");
@@ -279,7 +319,10 @@ pub fn validate(s: &Scene) -> Check {
     if !s.films.is_empty() {
         let st = s.physics.surface_tension;
         if !(st.is_finite() && st >= 0.0) {
-            return fail("physics.surface_tension", format!("must be >= 0 N/m, got {st}"));
+            return fail(
+                "physics.surface_tension",
+                format!("must be >= 0 N/m, got {st}"),
+            );
         }
     }
     Ok(())
@@ -287,14 +330,29 @@ pub fn validate(s: &Scene) -> Check {
 
 fn check_spacing(path: String, sp: f64, radius: f64, s: &Scene) -> Check {
     if !(sp.is_finite() && sp > 0.0 && sp <= 1.0) {
-        return fail(path, format!("must be in (0, 1] (relative to dx), got {sp}"));
+        return fail(
+            path,
+            format!("must be in (0, 1] (relative to dx), got {sp}"),
+        );
     }
     let n = radius / (sp * s.domain.dx);
     if n < 2.0 {
-        return fail(path, format!("spacing {} m leaves fewer than 2 particles across the radius {radius} m", sp * s.domain.dx));
+        return fail(
+            path,
+            format!(
+                "spacing {} m leaves fewer than 2 particles across the radius {radius} m",
+                sp * s.domain.dx
+            ),
+        );
     }
     if n > 2000.0 {
-        return fail(path, format!("spacing {} m gives {n:.0} particles across the radius (limit 2000)", sp * s.domain.dx));
+        return fail(
+            path,
+            format!(
+                "spacing {} m gives {n:.0} particles across the radius (limit 2000)",
+                sp * s.domain.dx
+            ),
+        );
     }
     Ok(())
 }
@@ -305,7 +363,11 @@ fn v3(a: &[f64; 3]) -> Vec3 {
 
 /// Two unit vectors completing `d` to an orthonormal basis.
 fn basis(d: &Vec3) -> (Vec3, Vec3) {
-    let a = if d.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+    let a = if d.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
     let e1 = d.cross(&a).normalize();
     (e1, d.cross(&e1))
 }
@@ -324,19 +386,34 @@ pub fn sample_films(s: &Scene) -> Particles {
     };
     for b in &s.films {
         match b {
-            FilmBody::Sphere { center, radius, hole_angle, hole_axis, velocity, spacing } => {
+            FilmBody::Sphere {
+                center,
+                radius,
+                hole_angle,
+                hole_axis,
+                velocity,
+                spacing,
+            } => {
                 let c = v3(center);
                 let ax = v3(hole_axis).normalize();
                 let cos_hole = hole_angle.cos();
-                let pts: Vec<(Vec3, Vec3, bool)> = latitude_sphere(c, *radius, spacing * s.domain.dx)
-                    .into_iter()
-                    .filter(|x| *hole_angle == 0.0 || (x - c).normalize().dot(&ax) < cos_hole)
-                    .map(|x| (x, v3(velocity), false))
-                    .collect();
+                let pts: Vec<(Vec3, Vec3, bool)> =
+                    latitude_sphere(c, *radius, spacing * s.domain.dx)
+                        .into_iter()
+                        .filter(|x| *hole_angle == 0.0 || (x - c).normalize().dot(&ax) < cos_hole)
+                        .map(|x| (x, v3(velocity), false))
+                        .collect();
                 let area = 2.0 * PI * radius * radius * (1.0 + hole_angle.cos());
                 add(&mut p, pts, area);
             }
-            FilmBody::Cylinder { center, axis, radius, length, ring_speed, spacing } => {
+            FilmBody::Cylinder {
+                center,
+                axis,
+                radius,
+                length,
+                ring_speed,
+                spacing,
+            } => {
                 let (c, a) = (v3(center), v3(axis).normalize());
                 let (e1, e2) = basis(&a);
                 let sp = spacing * s.domain.dx;
@@ -351,14 +428,23 @@ pub fn sample_films(s: &Scene) -> Particles {
                     for i in 0..nt {
                         let t = 2.0 * PI * (i as Real + phase) / nt as Real;
                         let x = c + a * z + (e1 * t.cos() + e2 * t.sin()) * *radius;
-                        let v = if ring { a * (z.signum() * ring_speed) } else { Vec3::zeros() };
+                        let v = if ring {
+                            a * (z.signum() * ring_speed)
+                        } else {
+                            Vec3::zeros()
+                        };
                         pts.push((x, v, ring));
                     }
                 }
                 let area = 2.0 * PI * radius * (length + dz);
                 add(&mut p, pts, area);
             }
-            FilmBody::Disk { center, normal, radius, spacing } => {
+            FilmBody::Disk {
+                center,
+                normal,
+                radius,
+                spacing,
+            } => {
                 let (c, n) = (v3(center), v3(normal).normalize());
                 let (e1, e2) = basis(&n);
                 let sp = spacing * s.domain.dx;

@@ -159,7 +159,8 @@ impl ShiftedSolver {
             LinearSolver::SparseLu => ShiftedSolver::Lu(Box::new(ShiftedLu::new(l, gamma)?)),
             LinearSolver::Bicgstab => {
                 let a = crate::linsolve::identity_plus(&l.matrix, 1.0, -gamma);
-                let pre = crate::linsolve::Jacobi::new(&crate::linsolve::Csr::from_faer(a.as_ref())?)?;
+                let pre =
+                    crate::linsolve::Jacobi::new(&crate::linsolve::Csr::from_faer(a.as_ref())?)?;
                 ShiftedSolver::Iterative {
                     a,
                     pre,

@@ -3,8 +3,8 @@ use clap::{Args, Subcommand};
 
 mod neighbors;
 mod operators;
-mod volume;
 mod surface;
+mod volume;
 
 /// Arguments of `codimfx bench`.
 #[derive(Args, Debug)]
