@@ -28,7 +28,9 @@
 //! particle's mass and momentum are merged into the survivor.
 //!
 //! Fixed (boundary) particles are never removed, never donate and never
-//! seed. All changes are applied at one point (the end of [`reseed`]).
+//! seed; seen from a film particle, the cells beyond a fixed neighbour count
+//! as filled, so the gap that opens between a film and a moving ring is
+//! refilled. All changes are applied at one point (the end of [`reseed`]).
 
 use crate::math::{Mat3, Real, Vec3};
 use crate::neighbors::{cell_of, neighbor_lists_between, CellGrid, CellMap};
@@ -133,6 +135,19 @@ fn sheet_candidates(
         let (u, v) = (d.dot(&b1) / c + 2.5, d.dot(&b2) / c + 2.5);
         if (0.0..5.0).contains(&u) && (0.0..5.0).contains(&v) {
             filled[u as usize][v as usize] = true;
+        }
+        if parts.fixed[q] {
+            // a boundary (ring) particle closes the film: the cells beyond it,
+            // seen from p, count as filled so a gap between the film and a
+            // moving ring is refilled
+            let (du, dv) = (u - 2.5, v - 2.5);
+            for k in 1..=4 {
+                let f = 1.0 + 0.5 * k as Real;
+                let (uu, vv) = (2.5 + du * f, 2.5 + dv * f);
+                if (0.0..5.0).contains(&uu) && (0.0..5.0).contains(&vv) {
+                    filled[uu as usize][vv as usize] = true;
+                }
+            }
         }
     }
     let mut out = Vec::new();
