@@ -278,6 +278,18 @@ fn insert(parts: &mut Particles, kind: Codim, cands: Vec<Vec3>, prm: &ReseedPara
     n
 }
 
+/// Adds particle `gone`'s mass and momentum to particle `keep` (velocity
+/// and radius become mass-weighted means); the caller deletes `gone`.
+fn merge_into(parts: &mut Particles, keep: usize, gone: usize) {
+    let (mk, mg) = (parts.mass[keep], parts.mass[gone]);
+    let m = mk + mg;
+    if m > 0.0 {
+        parts.v[keep] = (parts.v[keep] * mk + parts.v[gone] * mg) / m;
+        parts.radius[keep] = (parts.radius[keep] * mk + parts.radius[gone] * mg) / m;
+    }
+    parts.mass[keep] = m;
+}
+
 /// Removes particles of codimension `kind` closer than the threshold to a
 /// surviving one, merging mass and momentum. Returns the number removed.
 fn remove_close(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
@@ -308,13 +320,7 @@ fn remove_close(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
             }
         });
         if let Some((_, q)) = best {
-            let m = parts.mass[p] + parts.mass[q];
-            if m > 0.0 {
-                parts.v[p] = (parts.v[p] * parts.mass[p] + parts.v[q] * parts.mass[q]) / m;
-                parts.radius[p] =
-                    (parts.radius[p] * parts.mass[p] + parts.radius[q] * parts.mass[q]) / m;
-            }
-            parts.mass[p] = m;
+            merge_into(parts, p, q);
             alive[q] = false;
             n += 1;
         }
@@ -362,11 +368,7 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
         });
         let Some((_, q)) = best else { continue };
         if parts.mass[p] < prm.light_fraction * sum / cnt as Real {
-            let m = parts.mass[p] + parts.mass[q];
-            parts.v[q] = (parts.v[q] * parts.mass[q] + parts.v[p] * parts.mass[p]) / m;
-            parts.radius[q] =
-                (parts.radius[q] * parts.mass[q] + parts.radius[p] * parts.mass[p]) / m;
-            parts.mass[q] = m;
+            merge_into(parts, q, p);
             alive[p] = false;
             n += 1;
         }
@@ -408,11 +410,9 @@ fn absorb_into_rims(parts: &mut Particles, prm: &ReseedParams) -> u64 {
         });
         if let Some((_, b)) = best {
             let q = fil[b];
-            let m = parts.mass[q] + parts.mass[i];
-            if m > 0.0 {
-                parts.v[q] = (parts.v[q] * parts.mass[q] + parts.v[i] * parts.mass[i]) / m;
-            }
-            parts.mass[q] = m;
+            let r = parts.radius[q];
+            merge_into(parts, q, i);
+            parts.radius[q] = r; // the rim keeps its tube radius; it is recomputed from mass
             alive[i] = false;
             n += 1;
         }
