@@ -58,6 +58,9 @@ pub struct FilmParams {
     pub solver: BicgstabParams,
     /// Half-aperture of the cones that find filament ends (rad).
     pub bud_angle: Real,
+    /// A filament particle whose neighbourhood's second PCA eigenvalue
+    /// exceeds this fraction of the first is a clump and becomes a point.
+    pub clump_ratio: Real,
     /// Rim tension modulation (fluid polygon): corners and amplitude about the vertical axis through `centre`.
     pub rim_modulation: Option<(u32, Real, Vec3)>,
 }
@@ -93,6 +96,7 @@ impl FilmParams {
             reseed: Some(ReseedParams::paper(h)),
             solver: BicgstabParams::default(),
             bud_angle: std::f64::consts::PI / 6.0,
+            clump_ratio: 0.3,
             rim_modulation: None,
         }
     }

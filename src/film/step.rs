@@ -168,6 +168,8 @@ pub fn step(
         let frames = par_frames(&nb, &geom_mls);
         let axes: Vec<Mat3> = frames.iter().map(|f| f.axes).collect();
         if let Some(tp) = &prm.transitions {
+            let was_filament: Vec<bool> =
+                film.codim.iter().map(|c| *c == Codim::Filament).collect();
             info.transitions = update_codims(
                 &film.x,
                 &mut film.codim,
@@ -176,6 +178,22 @@ pub fn step(
                 |i| nb.lists.of(i),
                 tp,
             );
+            // a filament particle whose filament neighbourhood is not line-like
+            // (second PCA eigenvalue above `clump_ratio` × the first) is a clump:
+            // no curve fits it, so it becomes a point (a droplet)
+            for (i, f) in frames.iter().enumerate() {
+                let [l1, l2, _] = f.eigenvalues;
+                // (frames of particles that were filaments already: filament neighbours only)
+                if was_filament[i]
+                    && film.codim[i] == Codim::Filament
+                    && !film.fixed[i]
+                    && l1 > 0.0
+                    && l2 > prm.clump_ratio * l1
+                {
+                    film.codim[i] = Codim::Point;
+                    info.transitions.filament_to_point += 1;
+                }
+            }
         }
         info.timings.transition = t.elapsed().as_secs_f64();
         // 3. reseeding
