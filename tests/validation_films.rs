@@ -85,3 +85,29 @@ fn sphere_deformation_reseeding_keeps_the_sheet_and_returns() {
     assert!(r.coverage_max_stretch > 0.85, "{r:?}");
     assert!(r.max_gap_max_stretch < 0.8, "{r:?}");
 }
+
+#[test]
+fn catenoid_beyond_the_critical_separation_pinches() {
+    // d = 1.9 × 0.0384 m = 1.425 R > 1.3255 R: no catenoid exists, the neck must close
+    let s = 0.002;
+    let mut set = CatenoidSetup::paper(s);
+    set.length *= 1.9;
+    assert!(catenoid_neck(set.radius, set.length).is_none());
+    let mut p = set.particles();
+    let m0 = p.total_mass();
+    let mut prm = FilmParams::new(3.0 * s, 0.015);
+    prm.gravity = Vec3::zeros();
+    prm.damping = 30.0;
+    let mut st = FilmState::default();
+    for _ in 0..40 {
+        advance(&mut p, &mut st, &prm, 0.005, s, 0.5);
+    }
+    // nothing of the film is left near the middle ring of the original cylinder
+    let r = neck_radius(&p, 2.0 * s);
+    assert!(
+        r.is_none_or(|r| r < 0.2 * set.radius),
+        "neck {r:?} did not close"
+    );
+    assert!(p.all_finite());
+    assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
+}

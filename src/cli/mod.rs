@@ -4,3 +4,4 @@ pub mod preview;
 pub mod sim;
 pub mod surface;
 pub mod validate;
+pub mod validate_films;

@@ -92,6 +92,10 @@ enum Case {
     Curvature(CurvArgs),
     /// Implicit diffusion on a sheet wing with filament rim and tails (Fig. 12).
     Butterfly(ButterflyArgs),
+    /// Sheet reseeding under LeVeque's deformation flow and back (Fig. 15).
+    SphereDeformation(super::validate_films::DeformationArgs),
+    /// A film between two rings settles to the catenoid r = a cosh(z/a) (Fig. 6).
+    Catenoid(super::validate_films::CatenoidArgs),
 }
 
 /// Flags of `validate sphere-diffusion`.
@@ -179,6 +183,8 @@ pub fn run(a: ValidateArgs) -> Result<()> {
         Case::SphereDiffusion(s) => sphere(s),
         Case::Curvature(c) => curvature(c),
         Case::Butterfly(b) => butterfly(b),
+        Case::SphereDeformation(d) => super::validate_films::deformation(d),
+        Case::Catenoid(c) => super::validate_films::catenoid(c),
     }
 }
 
