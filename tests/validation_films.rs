@@ -1,7 +1,7 @@
 //! Film validation against analytic results (paper Fig. 6, Appendix E).
 
 use codimfx::film::catenoid::{catenoid_neck, neck_radius, CatenoidSetup};
-use codimfx::film::step::step_with_retry;
+use codimfx::film::step::advance_by;
 use codimfx::film::{FilmParams, FilmState};
 use codimfx::math::{Real, Vec3};
 use codimfx::particles::Particles;
@@ -16,20 +16,7 @@ fn advance(
     spacing: Real,
     cfl: Real,
 ) {
-    let mut left = frame_dt;
-    while left > 1e-12 {
-        let vmax = p.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
-        let mut dt = if vmax > 0.0 {
-            left.min(cfl * spacing / vmax)
-        } else {
-            left
-        };
-        if dt < left && left - dt < 0.2 * dt {
-            dt = 0.5 * left;
-        }
-        step_with_retry(p, st, prm, dt, 3).expect("film step");
-        left -= dt;
-    }
+    advance_by(p, st, prm, frame_dt, spacing, cfl).expect("film step");
 }
 
 #[test]

@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use codimfx::film::catenoid::{catenoid_neck, neck_radius, CatenoidSetup};
 use codimfx::film::deformation::{run as run_deformation, DeformationSetup};
-use codimfx::film::step::step_with_retry;
+use codimfx::film::step::advance_by;
 use codimfx::film::{FilmParams, FilmState};
 use codimfx::math::{Real, Vec3};
 
@@ -113,22 +113,8 @@ pub fn catenoid(a: CatenoidArgs) -> Result<()> {
     let mut st = FilmState::default();
     let mut substeps = 0;
     for f in 0..a.frames {
-        let mut left: Real = 0.005;
-        while left > 1e-12 {
-            let vmax = p.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
-            let mut dt = if vmax > 0.0 {
-                left.min(0.5 * a.spacing / vmax)
-            } else {
-                left
-            };
-            if dt < left && left - dt < 0.2 * dt {
-                dt = 0.5 * left;
-            }
-            step_with_retry(&mut p, &mut st, &prm, dt, 4)
-                .with_context(|| format!("catenoid frame {}", f + 1))?;
-            left -= dt;
-            substeps += 1;
-        }
+        substeps += advance_by(&mut p, &mut st, &prm, 0.005, a.spacing, 0.5)
+            .with_context(|| format!("catenoid frame {}", f + 1))?;
     }
     let exact = catenoid_neck(set.radius, set.length);
     let neck = neck_radius(&p, 0.6 * a.spacing);

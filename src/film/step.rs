@@ -492,3 +492,34 @@ pub fn step_with_retry(
         }
     }
 }
+
+/// Advances the films by `duration` in substeps whose motion stays below
+/// `cfl` × `spacing` (the last substeps split so none is tiny); returns the
+/// number of substeps. Used by the validation cases; scenes go through
+/// [`crate::film::driver::advance`], which also keeps the frame record.
+pub fn advance_by(
+    parts: &mut Particles,
+    state: &mut FilmState,
+    prm: &FilmParams,
+    duration: Real,
+    spacing: Real,
+    cfl: Real,
+) -> Result<usize, FilmError> {
+    let mut left = duration;
+    let mut n = 0;
+    while left > 1e-12 * duration {
+        let vmax = parts.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+        let mut dt = if vmax > 0.0 {
+            left.min(cfl * spacing / vmax)
+        } else {
+            left
+        };
+        if dt < left && left - dt < 0.2 * dt {
+            dt = 0.5 * left;
+        }
+        step_with_retry(parts, state, prm, dt, 4)?;
+        left -= dt;
+        n += 1;
+    }
+    Ok(n)
+}
