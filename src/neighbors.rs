@@ -278,7 +278,7 @@ pub fn neighbor_lists_kiddo(points: &[Vec3], radius: Real) -> NeighborLists {
                 .execute()
                 .into_iter()
                 .filter(|n| n.item as usize != i && n.distance < r2)
-                .map(|n| n.item as u32)
+                .map(|n| n.item)
                 .collect();
             row.sort_unstable();
             row

@@ -27,6 +27,7 @@
 //! - 1→2: cones along b² with θ = π/6: exactly one cone holds sheet or
 //!   filament particles (the particle is on a sheet's edge).
 //! - 2→3: no filament particle within h.
+//!
 //! The paper implements no 2→1; neither does this module.
 
 use crate::math::{Mat3, Real, Vec3};

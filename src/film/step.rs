@@ -163,7 +163,7 @@ pub fn step(
         sheet_weight_in_filament: 0.0,
         ..prm.mls
     };
-    if film.len() > 0 && (prm.transitions.is_some() || prm.reseed.is_some()) {
+    if !film.is_empty() && (prm.transitions.is_some() || prm.reseed.is_some()) {
         let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
         let frames = par_frames(&nb, &geom_mls);
         let axes: Vec<Mat3> = frames.iter().map(|f| f.axes).collect();
