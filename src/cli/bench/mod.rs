@@ -1,6 +1,7 @@
 //! `codimfx bench …`: one file per benchmark target.
 use clap::{Args, Subcommand};
 
+mod films;
 mod neighbors;
 mod operators;
 mod surface;
@@ -21,6 +22,8 @@ enum BenchTarget {
     Operators(operators::OperatorsArgs),
     /// PIC/FLIP volume solver: ms per substep per stage on a 250k-particle dam break.
     Volume(volume::VolumeArgs),
+    /// Film step on the paper's bursting bubble and catenoid: s per step per stage.
+    Films(films::FilmsArgs),
     /// Surfacer on a ~860k-particle blob: time, peak memory, triangles (and splashsurf if on PATH).
     Surface(surface::SurfaceBenchArgs),
 }
@@ -32,5 +35,6 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
         BenchTarget::Operators(x) => operators::run(x),
         BenchTarget::Volume(x) => volume::run(x),
         BenchTarget::Surface(x) => surface::run(x),
+        BenchTarget::Films(x) => films::run(x),
     }
 }
