@@ -5,6 +5,7 @@
 //! `docs/architecture.md` for the module map and the data flow of a step.
 
 pub mod area;
+pub mod coupling;
 pub mod emitter;
 pub mod film;
 pub mod gas;

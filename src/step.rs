@@ -18,26 +18,35 @@
 //! monolithic tension/coupling solve of §7 replaces the projection call.
 
 use crate::advect::{advect, AdvectInfo};
+use crate::coupling::{self, CouplingError, CouplingInfo, CouplingParams, Method, SurfaceParams};
 use crate::grid::pcg::{NotFinite, PcgParams, SolveInfo};
 use crate::grid::projection::{project_liquid, ProjectionInfo};
 use crate::grid::transfer::{grid_to_particles, grid_to_particles_apic, transfer_to_grid};
 use crate::grid::viscosity::viscosity;
 use crate::grid::MacGrid;
+use crate::linsolve::BicgstabParams;
 use crate::math::{Real, Vec3};
+use crate::mls::MlsParams;
 use crate::particles::Particles;
 use crate::scene::{Scene, Transfer};
 use crate::solids::SolidSet;
+use crate::transition::{TransitionCounts, TransitionParams};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// Stage names, in the order they run; every substep reports all of them.
-pub const STAGES: [&str; 6] = [
+pub const STAGES: [&str; 11] = [
     "body_force",
     "p2g",
     "viscosity",
     "projection",
+    "mls_operators",
+    "coupled_assembly",
+    "coupled_factor",
+    "coupled_solve",
     "g2p",
     "advect",
+    "transition",
 ];
 
 /// Wall time per stage (s), accumulated.
@@ -101,6 +110,9 @@ pub struct StepParams {
     pub lo: Vec3,
     /// Domain box (m).
     pub hi: Vec3,
+    /// Surface tension coupling (§7); `None` when σ = 0 and the scene has
+    /// no sheet or filament particles (the plain projection runs).
+    pub coupling: Option<CouplingParams>,
 }
 
 impl StepParams {
@@ -125,7 +137,37 @@ impl StepParams {
             margin: s.time.cfl.ceil() as usize + 2,
             lo: Vec3::from(s.domain.min),
             hi: Vec3::from(s.domain.max),
+            coupling: (s.physics.surface_tension > 0.0).then(|| coupling_params(s)),
         }
+    }
+}
+
+/// The coupled solve's parameters of a scene: MLS support h = Δx (Appendix
+/// F), the film fit order, the scene's BiCGSTAB rule.
+pub fn coupling_params(s: &Scene) -> CouplingParams {
+    let h = s.domain.dx;
+    CouplingParams {
+        method: Method::default(),
+        solver: BicgstabParams {
+            tol: 1e-9,
+            max_iter: 2000,
+        },
+        surface: SurfaceParams {
+            mls: MlsParams {
+                order: s.film.order,
+                ..MlsParams::new(h)
+            },
+            sigma: s.physics.surface_tension,
+            density: s.physics.density,
+            bud_angle: std::f64::consts::PI / 6.0,
+            rim_modulation: None,
+        },
+        pressure: PcgParams {
+            tolerance: s.solver.pressure_tolerance,
+            max_iterations: s.solver.pressure_max_iterations,
+        },
+        verify: false,
+        transitions: Some(TransitionParams::paper(h)),
     }
 }
 
@@ -163,6 +205,10 @@ pub struct SubstepInfo {
     pub dt: Real,
     /// Pressure projection record.
     pub pressure: ProjectionInfo,
+    /// Coupled solve record (scenes with surface tension).
+    pub coupling: Option<CouplingInfo>,
+    /// Codimension transitions after the advection (§8).
+    pub transitions: TransitionCounts,
     /// Viscosity solves (x, y, z), `None` when skipped (μ = 0).
     pub viscosity: Option<[SolveInfo; 3]>,
     /// Corrections during advection.
@@ -176,6 +222,9 @@ pub struct SubstepInfo {
 /// Why a substep failed.
 #[derive(Debug, thiserror::Error)]
 pub enum StepError {
+    /// The coupled pressure/tension solve failed.
+    #[error("coupled surface tension solve: {0}")]
+    Coupling(#[from] CouplingError),
     /// The pressure solve produced non-finite values.
     #[error("pressure projection: {0}")]
     Pressure(NotFinite),
@@ -261,11 +310,29 @@ pub fn step(
         times.add("viscosity", 0.0); // skipped (μ = 0): reported as 0
         None
     };
-    // 7: projection; the monolithic tension/coupling solve of §7 takes its place
-    info.pressure = timed(times, "projection", || {
-        project_liquid(grid, solids, p.pressure, p.margin + 1)
-    })
-    .map_err(StepError::Pressure)?;
+    // 7: projection, or with surface tension the coupled solve of §7
+    if let Some(cp) = &p.coupling {
+        let c = coupling::solve(grid, solids, particles, cp, dt, p.margin + 1)?;
+        times.add("mls_operators", c.operators_s);
+        times.add("coupled_assembly", c.assemble_s);
+        times.add("coupled_factor", c.factor_s);
+        times.add("coupled_solve", c.solve_s);
+        info.pressure = ProjectionInfo {
+            solve: SolveInfo {
+                iterations: c.iterations as u32,
+                rel_residual: c.rel_residual,
+                converged: true,
+            },
+            cells: c.cells,
+            theta_clamps: c.theta_clamps,
+        };
+        info.coupling = Some(c);
+    } else {
+        info.pressure = timed(times, "projection", || {
+            project_liquid(grid, solids, p.pressure, p.margin + 1)
+        })
+        .map_err(StepError::Pressure)?;
+    }
     // 8: grid → particles
     timed(times, "g2p", || match p.transfer {
         Transfer::Flip => grid_to_particles(grid, particles, p.flip),
@@ -278,8 +345,14 @@ pub fn step(
     });
     info.blocks = grid.blocks.len();
     info.liquid_volume = grid.liquid_volume();
-    // 2–3: codimension update (§8) and reseeding (§9) edit `particles` here,
-    // through `Particles::retain` / `Particles::push`.
+    // 2: codimension update (§8) of the next cycle
+    if let Some(tp) = p.coupling.as_ref().and_then(|c| c.transitions.as_ref()) {
+        info.transitions = timed(times, "transition", || {
+            coupling::codim::update(particles, tp)
+        });
+    } else {
+        times.add("transition", 0.0);
+    }
     let bad = count_non_finite(particles);
     if bad > 0 {
         return Err(StepError::NonFinite {

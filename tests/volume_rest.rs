@@ -76,9 +76,20 @@ fn check_rest(text: &str, count: usize) {
         );
     }
     let last = sim.manifest.frames.last().unwrap();
-    // every stage is in the time map; viscosity is skipped (μ = 0) and shows 0
-    assert_eq!(last.stage_s.len(), 6);
+    // every stage is in the time map; viscosity is skipped (μ = 0) and,
+    // with σ = 0, so are the coupled solve and the codimension update
+    assert_eq!(last.stage_s.len(), codimfx::step::STAGES.len());
     assert_eq!(last.stage_s["viscosity"], 0.0);
+    for s in [
+        "mls_operators",
+        "coupled_assembly",
+        "coupled_factor",
+        "coupled_solve",
+        "transition",
+    ] {
+        assert_eq!(last.stage_s[s], 0.0, "{s}");
+    }
+    assert!(last.stage_s["projection"] > 0.0);
     assert_eq!(last.viscosity.solves, 0);
     assert_eq!(last.pressure.unconverged, 0);
     eprintln!("rest: max speed after 1 s = {vmax:e} m/s");

@@ -50,145 +50,222 @@ fn theta(phi_in: Real, phi_out: Real) -> (Real, bool) {
     }
 }
 
+/// The pressure system of the liquid: unknowns, 7-point matrix and
+/// right-hand side, built once and shared by the plain projection and the
+/// coupled solve of §7 ([`crate::coupling`]).
+#[derive(Clone, Debug, Default)]
+pub struct Poisson {
+    /// Liquid level set, extended half a cell into solids.
+    pub phi: Vec<Real>,
+    /// Unknown index of each slot's cell, or [`NONE`].
+    pub index: Vec<u32>,
+    /// Slot of each unknown.
+    pub cells: Vec<usize>,
+    /// The SPD matrix.
+    pub a: Stencil7,
+    /// Right-hand side: −(weighted divergence) of `grid.u`.
+    pub b: Vec<Real>,
+    /// Free-surface faces whose θ was clamped to [`THETA_MIN`].
+    pub theta_clamps: usize,
+}
+
+/// The two sides of face `(a, s)` (axis `a`, the lower face of slot `s`):
+/// unknown indices of the lower and upper cells (if liquid) and the
+/// ghost-fluid fraction θ of the face (1 between two liquid cells).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceSides {
+    /// Unknown below the face.
+    pub lo: Option<u32>,
+    /// Unknown above the face.
+    pub hi: Option<u32>,
+    /// Ghost-fluid fraction.
+    pub theta: Real,
+}
+
+impl Poisson {
+    /// Builds the system. Faces for which `skip(axis, slot)` is true are left
+    /// out of the operator and of the divergence (their velocity is set by
+    /// something else: the constraint faces of the eliminated coupled system).
+    pub fn build(
+        g: &MacGrid,
+        solids: &SolidSet,
+        skip: impl Fn(usize, usize) -> bool + Sync,
+    ) -> Poisson {
+        let ns = g.slots();
+        let dx = g.dx;
+        // Liquid level set extended half a cell into solids (Batty et al. 2007), so
+        // liquid resting on a cut-cell solid has no spurious free surface there.
+        let phi: Vec<Real> = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                let p = g.phi[s];
+                if !solids.is_empty() && p < 0.5 * dx && solids.phi(&g.cell_pos(s)) < 0.0 {
+                    p.min(-0.5 * dx)
+                } else {
+                    p
+                }
+            })
+            .collect();
+        let open = |s: usize, a: usize| -> Real {
+            match g.neighbor(s, unit(a, 1)) {
+                Some(t) => g.weight[a][s] + g.weight[a][t],
+                None => g.weight[a][s],
+            }
+        };
+        let mut index = vec![NONE; ns];
+        let mut cells = Vec::new();
+        for s in 0..ns {
+            if g.in_domain(s) && phi[s] < 0.0 && (0..3).map(|a| open(s, a)).sum::<Real>() > 0.0 {
+                index[s] = cells.len() as u32;
+                cells.push(s);
+            }
+        }
+        let phi_at = |t: Option<usize>| t.map_or(dx, |t| phi[t]);
+        let rows: Vec<Row> = cells
+            .par_iter()
+            .map(|&s| {
+                let mut diag = 0.0;
+                let mut up = [NONE; 3];
+                let mut lo = [NONE; 3];
+                let mut off = [0.0; 3];
+                let mut rhs = 0.0;
+                let mut clamps = 0;
+                for a in 0..3 {
+                    let w_lo = g.weight[a][s];
+                    if w_lo > 0.0 && !skip(a, s) {
+                        let n = g.neighbor(s, unit(a, -1));
+                        rhs += w_lo * g.u[a][s];
+                        match n.map(|n| index[n]) {
+                            Some(i) if i != NONE => {
+                                diag += w_lo;
+                                lo[a] = i;
+                            }
+                            _ => {
+                                let (th, c) = theta(phi[s], phi_at(n));
+                                clamps += c as usize;
+                                diag += w_lo / th;
+                            }
+                        }
+                    }
+                    let t = g.neighbor(s, unit(a, 1));
+                    let w_hi = t.map_or(0.0, |t| g.weight[a][t]);
+                    if w_hi > 0.0 {
+                        let t = t.unwrap_or(0);
+                        if skip(a, t) {
+                            continue;
+                        }
+                        rhs -= w_hi * g.u[a][t];
+                        if index[t] != NONE {
+                            diag += w_hi;
+                            up[a] = index[t];
+                            off[a] = -w_hi;
+                        } else {
+                            let (th, c) = theta(phi[s], phi[t]);
+                            clamps += c as usize;
+                            diag += w_hi / th;
+                        }
+                    }
+                }
+                (diag, up, off, lo, rhs, clamps)
+            })
+            .collect();
+        let mut a = Stencil7::default();
+        let mut b = Vec::with_capacity(rows.len());
+        let mut theta_clamps = 0;
+        for (d, up, off, lo, r, c) in rows {
+            a.diag.push(d);
+            a.up.push(up);
+            a.off.push(off);
+            a.lo.push(lo);
+            b.push(r);
+            theta_clamps += c;
+        }
+        Poisson {
+            phi,
+            index,
+            cells,
+            a,
+            b,
+            theta_clamps,
+        }
+    }
+
+    /// Unknown of slot `s`, if its cell is liquid.
+    #[inline]
+    pub fn unknown(&self, s: usize) -> Option<u32> {
+        let i = self.index[s];
+        (i != NONE).then_some(i)
+    }
+
+    /// The sides of face `(a, s)`; `None` when neither side is liquid.
+    pub fn face(&self, g: &MacGrid, a: usize, s: usize) -> Option<FaceSides> {
+        let l = g.neighbor(s, unit(a, -1));
+        let lo = l.and_then(|l| self.unknown(l));
+        let hi = self.unknown(s);
+        let phi_at = |t: Option<usize>| t.map_or(g.dx, |t| self.phi[t]);
+        let theta = match (lo, hi) {
+            (Some(_), Some(_)) => 1.0,
+            (Some(_), None) => theta(phi_at(l), self.phi[s]).0,
+            (None, Some(_)) => theta(self.phi[s], phi_at(l)).0,
+            (None, None) => return None,
+        };
+        Some(FaceSides { lo, hi, theta })
+    }
+
+    /// Pressure update of every open face next to liquid:
+    /// `u_f ← u_f − (q_hi − q_lo)/θ_f + extra(a, s)` (the coupling adds its
+    /// impulses through `extra`); returns the faces that hold a projected value.
+    pub fn apply(
+        &self,
+        grid: &mut MacGrid,
+        q: &[Real],
+        extra: impl Fn(usize, usize) -> Real + Sync,
+    ) -> Valid {
+        let g: &MacGrid = grid;
+        let ns = g.slots();
+        let mut valid: Valid = Default::default();
+        let mut newu: [Vec<Real>; 3] = Default::default();
+        for ax in 0..3 {
+            let (nu, vf): (Vec<Real>, Vec<u8>) = (0..ns)
+                .into_par_iter()
+                .map(|s| {
+                    let u = g.u[ax][s];
+                    if is_wall_face(g, s, ax) || g.weight[ax][s] == 0.0 {
+                        return (0.0, 0);
+                    }
+                    match self.face(g, ax, s) {
+                        Some(f) => {
+                            let ql = f.lo.map_or(0.0, |i| q[i as usize]);
+                            let qh = f.hi.map_or(0.0, |i| q[i as usize]);
+                            (u - (qh - ql) / f.theta + extra(ax, s), 1)
+                        }
+                        None => (u, 0),
+                    }
+                })
+                .unzip();
+            newu[ax] = nu;
+            valid[ax] = vf;
+        }
+        grid.u = newu;
+        valid
+    }
+}
+
 /// Projects `grid.u` to be divergence free in the liquid; returns the faces that hold a projected value.
 pub fn project(
     grid: &mut MacGrid,
     solids: &SolidSet,
     prm: PcgParams,
 ) -> Result<(ProjectionInfo, Valid), NotFinite> {
-    let g: &MacGrid = grid;
-    let ns = g.slots();
-    let dx = g.dx;
-    // Liquid level set extended half a cell into solids (Batty et al. 2007), so
-    // liquid resting on a cut-cell solid has no spurious free surface there.
-    let phi: Vec<Real> = (0..ns)
-        .into_par_iter()
-        .map(|s| {
-            let p = g.phi[s];
-            if !solids.is_empty() && p < 0.5 * dx && solids.phi(&g.cell_pos(s)) < 0.0 {
-                p.min(-0.5 * dx)
-            } else {
-                p
-            }
-        })
-        .collect();
-    let open = |s: usize, a: usize| -> Real {
-        match g.neighbor(s, unit(a, 1)) {
-            Some(t) => g.weight[a][s] + g.weight[a][t],
-            None => g.weight[a][s],
-        }
-    };
-    let mut index = vec![NONE; ns];
-    let mut cells = Vec::new();
-    for s in 0..ns {
-        if g.in_domain(s) && phi[s] < 0.0 && (0..3).map(|a| open(s, a)).sum::<Real>() > 0.0 {
-            index[s] = cells.len() as u32;
-            cells.push(s);
-        }
-    }
-    let phi_at = |t: Option<usize>| t.map_or(dx, |t| phi[t]);
-    let rows: Vec<Row> = cells
-        .par_iter()
-        .map(|&s| {
-            let mut diag = 0.0;
-            let mut up = [NONE; 3];
-            let mut lo = [NONE; 3];
-            let mut off = [0.0; 3];
-            let mut rhs = 0.0;
-            let mut clamps = 0;
-            for a in 0..3 {
-                let w_lo = g.weight[a][s];
-                if w_lo > 0.0 {
-                    let n = g.neighbor(s, unit(a, -1));
-                    rhs += w_lo * g.u[a][s];
-                    match n.map(|n| index[n]) {
-                        Some(i) if i != NONE => {
-                            diag += w_lo;
-                            lo[a] = i;
-                        }
-                        _ => {
-                            let (th, c) = theta(phi[s], phi_at(n));
-                            clamps += c as usize;
-                            diag += w_lo / th;
-                        }
-                    }
-                }
-                let t = g.neighbor(s, unit(a, 1));
-                let w_hi = t.map_or(0.0, |t| g.weight[a][t]);
-                if w_hi > 0.0 {
-                    let t = t.unwrap_or(0);
-                    rhs -= w_hi * g.u[a][t];
-                    if index[t] != NONE {
-                        diag += w_hi;
-                        up[a] = index[t];
-                        off[a] = -w_hi;
-                    } else {
-                        let (th, c) = theta(phi[s], phi[t]);
-                        clamps += c as usize;
-                        diag += w_hi / th;
-                    }
-                }
-            }
-            (diag, up, off, lo, rhs, clamps)
-        })
-        .collect();
-    let mut a = Stencil7::default();
-    let mut b = Vec::with_capacity(rows.len());
-    let mut theta_clamps = 0;
-    for (d, up, off, lo, r, c) in rows {
-        a.diag.push(d);
-        a.up.push(up);
-        a.off.push(off);
-        a.lo.push(lo);
-        b.push(r);
-        theta_clamps += c;
-    }
-    let mut q = vec![0.0; a.len()];
-    let solve = pcg(&a, &b, &mut q, prm)?;
-    // velocity update on every open face next to liquid
-    let qv = |s: usize| {
-        if index[s] == NONE {
-            None
-        } else {
-            Some(q[index[s] as usize])
-        }
-    };
-    let mut valid: Valid = Default::default();
-    let mut newu: [Vec<Real>; 3] = Default::default();
-    for ax in 0..3 {
-        let (nu, vf): (Vec<Real>, Vec<u8>) = (0..ns)
-            .into_par_iter()
-            .map(|s| {
-                if is_wall_face(g, s, ax) || g.weight[ax][s] == 0.0 {
-                    return (0.0, 0);
-                }
-                let l = g.neighbor(s, unit(ax, -1));
-                let ql = l.and_then(qv);
-                let qs = qv(s);
-                let u = g.u[ax][s];
-                match (ql, qs) {
-                    (Some(ql), Some(qs)) => (u - (qs - ql), 1),
-                    (Some(ql), None) => {
-                        let (th, _) = theta(phi_at(l), phi[s]);
-                        (u + ql / th, 1)
-                    }
-                    (None, Some(qs)) => {
-                        let (th, _) = theta(phi[s], phi_at(l));
-                        (u - qs / th, 1)
-                    }
-                    (None, None) => (u, 0),
-                }
-            })
-            .unzip();
-        newu[ax] = nu;
-        valid[ax] = vf;
-    }
-    grid.u = newu;
+    let sys = Poisson::build(grid, solids, |_, _| false);
+    let mut q = vec![0.0; sys.a.len()];
+    let solve = pcg(&sys.a, &sys.b, &mut q, prm)?;
+    let valid = sys.apply(grid, &q, |_, _| 0.0);
     Ok((
         ProjectionInfo {
             solve,
-            cells: cells.len(),
-            theta_clamps,
+            cells: sys.cells.len(),
+            theta_clamps: sys.theta_clamps,
         },
         valid,
     ))

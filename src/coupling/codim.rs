@@ -1,0 +1,150 @@
+//! Codimension update of a liquid scene (paper §8, Algorithm 1 line 2):
+//! the four rules of [`crate::transition`] applied to the volume, sheet and
+//! filament particles together.
+//!
+//! - Frames: a volume particle takes the weighted-PCA frame (eqs. 25–29) of
+//!   all its neighbours within h, so at the liquid's surface b³ is the
+//!   normal (a half ball is thinnest across its flat side); a sheet
+//!   particle the frame of its sheet neighbours; a filament particle that of
+//!   its filament neighbours.
+//! - 0→1: a volume particle whose π/3 cones along ±b³ hold volume/sheet
+//!   particles on one side only is exposed and joins the surface layer (or
+//!   the volume is thinner than the thin distance across it).
+//! - 1→0: a sheet particle with volume particles in both π/4 cones has been
+//!   engulfed.
+//! - 1→2 applies to free sheets only: a sheet particle with a volume
+//!   particle within h is part of a liquid surface, whose end at a nozzle
+//!   or a wall is not a thin sheet's rim (the rule would otherwise turn the
+//!   upstream edge of every jet's surface layer into filaments).
+//! - 2→3: a filament particle without filament neighbours is a droplet.
+//!
+//! Masses do not change (a particle keeps its mass through a transition),
+//! so mass is conserved exactly.
+
+use crate::math::Mat3;
+use crate::mls::frame::pca_frame;
+use crate::neighbors::neighbor_lists;
+use crate::particles::{Codim, Particles};
+use crate::transition::{new_codim, TransitionCounts, TransitionParams};
+use rayon::prelude::*;
+
+/// Applies the transition rules to every non-fixed particle of `parts`.
+pub fn update(parts: &mut Particles, prm: &TransitionParams) -> TransitionCounts {
+    let h = prm.h;
+    let x = &parts.x;
+    let codim = &parts.codim;
+    let lists = neighbor_lists(x, h);
+    let same = |p: usize, q: usize| match codim[p] {
+        Codim::Volume => codim[q] != Codim::Point,
+        Codim::Sheet => codim[q] == Codim::Sheet,
+        Codim::Filament => codim[q] == Codim::Filament,
+        Codim::Point => false,
+    };
+    let next: Vec<Codim> = (0..x.len())
+        .into_par_iter()
+        .map(|p| {
+            if parts.fixed[p] || codim[p] == Codim::Point {
+                return codim[p];
+            }
+            let nb = lists.of(p);
+            let frame: Mat3 = pca_frame(
+                &x[p],
+                nb.iter()
+                    .map(|&q| q as usize)
+                    .filter(|&q| same(p, q))
+                    .map(|q| x[q]),
+                h,
+            )
+            .axes;
+            let c = new_codim(p, &frame, x, codim, &parts.fixed, nb, prm);
+            let attached = || {
+                nb.iter().any(|&q| {
+                    codim[q as usize] == Codim::Volume && (x[q as usize] - x[p]).norm() < h
+                })
+            };
+            if codim[p] == Codim::Sheet && c == Codim::Filament && attached() {
+                Codim::Sheet
+            } else {
+                c
+            }
+        })
+        .collect();
+    let mut n = TransitionCounts::default();
+    for (c, nc) in parts.codim.iter_mut().zip(next) {
+        match (*c, nc) {
+            (Codim::Volume, Codim::Sheet) => n.volume_to_sheet += 1,
+            (Codim::Sheet, Codim::Volume) => n.sheet_to_volume += 1,
+            (Codim::Sheet, Codim::Filament) => n.sheet_to_filament += 1,
+            (Codim::Filament, Codim::Point) => n.filament_to_point += 1,
+            _ => {}
+        }
+        *c = nc;
+    }
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{Real, Vec3};
+
+    /// A lattice box of volume particles with spacing s.
+    fn block(n: usize, s: Real) -> Particles {
+        let mut p = Particles::new();
+        for i in 0..n {
+            for j in 0..n {
+                for k in 0..n {
+                    let x = Vec3::new(i as Real, j as Real, k as Real) * s;
+                    p.push(x, Vec3::zeros(), 1.0, 0.5 * s, Codim::Volume);
+                }
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn exposed_layer_becomes_sheet_and_an_engulfed_sheet_returns() {
+        let s = 0.25;
+        let n = 12;
+        let mut p = block(n, s);
+        let prm = TransitionParams::paper(4.0 * s);
+        let mass0 = p.total_mass();
+        let c = update(&mut p, &prm);
+        // the outer layer of the cube is exposed on faces; corners/edges too
+        let on_boundary = |x: &Vec3| {
+            x.iter()
+                .any(|&v| v.abs() < 1e-9 || (v - (n - 1) as Real * s).abs() < 1e-9)
+        };
+        for i in 0..p.len() {
+            let deep = p.x[i]
+                .iter()
+                .all(|&v| v > 1.5 * s && v < (n as Real - 2.5) * s);
+            if deep {
+                assert_eq!(p.codim[i], Codim::Volume, "interior particle {i} changed");
+            }
+            if on_boundary(&p.x[i]) {
+                assert_eq!(
+                    p.codim[i],
+                    Codim::Sheet,
+                    "surface particle {i} at {}",
+                    p.x[i]
+                );
+            }
+        }
+        assert!(c.volume_to_sheet as usize >= 6 * (n - 2) * (n - 2));
+        assert_eq!(c.sheet_to_volume, 0);
+        assert_eq!(p.total_mass(), mass0);
+        // a sheet particle placed inside the volume is engulfed
+        let mid = (n as Real - 1.0) * 0.5 * s;
+        let q = p.push(
+            Vec3::new(mid, mid, mid + 0.1 * s),
+            Vec3::zeros(),
+            1.0,
+            0.1,
+            Codim::Sheet,
+        );
+        let c = update(&mut p, &prm);
+        assert_eq!(p.codim[q], Codim::Volume);
+        assert!(c.sheet_to_volume >= 1);
+    }
+}

@@ -1,0 +1,125 @@
+//! Constraint faces and the interpolation J of eq. (18) (paper §7).
+//!
+//! The paper marks a MAC face as a constraint face when a sheet particle
+//! lies in its control volume and interpolates the sheet velocities onto it.
+//! Here J is the normalised transpose of the trilinear face stencil: a face
+//! f of axis a gets
+//!
+//! J_{f,i} = w_{fi} / Σ_j w_{fj},   w_{fi} = Π_d (1 − |x_{f,d} − x_{i,d}| / Δx)₊,
+//!
+//! over the sheet particles whose stencil touches it (|x_f − x_i|_∞ < Δx),
+//! so a constant sheet velocity is reproduced exactly and the faces between
+//! the particles' cells are constrained too. This support is one cell wider
+//! than the paper's control volume: every free-surface face within a cell of
+//! the sheet becomes a constraint face, so no pressure leaks through a
+//! free-surface face the sheet layer missed (the paper samples particles
+//! more densely for the same reason, Appendix F). Only faces that are open
+//! (cut-cell weight > 0), not on the domain walls, and next to at least one
+//! liquid cell enter K: the face mass of eq. (19) belongs to the liquid.
+
+use crate::grid::extrapolate::is_wall_face;
+use crate::grid::projection::{FaceSides, Poisson};
+use crate::grid::{MacGrid, NONE};
+use crate::math::{Real, Vec3};
+use rayon::prelude::*;
+
+/// The constraint faces (rows of K) and J, in (axis, slot) order.
+#[derive(Clone, Debug, Default)]
+pub struct Constraints {
+    /// Axis and slot (lower face of that slot's cell) of each constraint face.
+    pub faces: Vec<(usize, usize)>,
+    /// Liquid sides and ghost-fluid fraction θ of each face.
+    pub sides: Vec<FaceSides>,
+    /// Open fraction w_f of each face.
+    pub weight: Vec<Real>,
+    /// J in compressed rows: `col[ptr[f]..ptr[f+1]]` are sheet particles
+    /// (joint index), `val` their weights (each row sums to 1).
+    pub ptr: Vec<usize>,
+    /// Particle column of each entry.
+    pub col: Vec<u32>,
+    /// Weight of each entry.
+    pub val: Vec<Real>,
+    /// Constraint index of face (a, s), or [`NONE`] (one table per axis).
+    pub of_face: [Vec<u32>; 3],
+}
+
+impl Constraints {
+    /// Number of constraint faces.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// True when no face is constrained.
+    pub fn is_empty(&self) -> bool {
+        self.faces.is_empty()
+    }
+
+    /// Entries of row f of J: (sheet particle, weight).
+    pub fn row(&self, f: usize) -> impl Iterator<Item = (usize, Real)> + '_ {
+        (self.ptr[f]..self.ptr[f + 1]).map(|k| (self.col[k] as usize, self.val[k]))
+    }
+
+    /// (J u)_f: the sheet velocity component of the face's axis interpolated onto it.
+    pub fn interpolate(&self, f: usize, u: &[Vec3]) -> Real {
+        let a = self.faces[f].0;
+        self.row(f).map(|(i, w)| w * u[i][a]).sum()
+    }
+
+    /// Constraint index of face (a, s).
+    #[inline]
+    pub fn index(&self, a: usize, s: usize) -> Option<usize> {
+        let i = self.of_face[a][s];
+        (i != NONE).then_some(i as usize)
+    }
+}
+
+/// Finds the constraint faces of the sheet particles at `x` (joint indices
+/// `0..x.len()`) and builds J. Deterministic: entries are sorted by face,
+/// then particle.
+pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
+    // (axis, slot, particle, weight) of every stencil entry
+    let mut entries: Vec<(u8, u32, u32, Real)> = x
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, p)| {
+            (0..3).flat_map(move |a| {
+                let (idx, w) = g.stencil(a, p);
+                (0..8).filter_map(move |k| {
+                    (idx[k] != NONE && w[k] > 0.0).then_some((a as u8, idx[k], i as u32, w[k]))
+                })
+            })
+        })
+        .collect();
+    entries.par_sort_unstable_by(|p, q| (p.0, p.1, p.2).cmp(&(q.0, q.1, q.2)));
+    let ns = g.slots();
+    let mut c = Constraints {
+        ptr: vec![0],
+        of_face: [vec![NONE; ns], vec![NONE; ns], vec![NONE; ns]],
+        ..Default::default()
+    };
+    let mut k = 0;
+    while k < entries.len() {
+        let (a, s) = (entries[k].0 as usize, entries[k].1 as usize);
+        let mut e = k;
+        while e < entries.len() && entries[e].0 as usize == a && entries[e].1 as usize == s {
+            e += 1;
+        }
+        let sides = (!is_wall_face(g, s, a) && g.weight[a][s] > 0.0)
+            .then(|| sys.face(g, a, s))
+            .flatten();
+        if let Some(sides) = sides {
+            let total: Real = entries[k..e].iter().map(|t| t.3).sum();
+            c.of_face[a][s] = c.faces.len() as u32;
+            c.faces.push((a, s));
+            c.sides.push(sides);
+            c.weight.push(g.weight[a][s]);
+            for t in &entries[k..e] {
+                c.col.push(t.2);
+                c.val.push(t.3 / total);
+            }
+            c.ptr.push(c.col.len());
+        }
+        k = e;
+    }
+    c
+}

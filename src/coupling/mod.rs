@@ -1,0 +1,338 @@
+//! Codimensional coupling (paper §7, eqs. 18–24): the grid pressure of the
+//! volume, the semi-implicit surface tension of the sheet and filament
+//! particles (§6, eq. 17) and the impulses λ on the constraint faces, solved
+//! as one system per substep. This replaces the projection (Algorithm 1,
+//! step 7) whenever a scene has surface tension.
+//!
+//! - [`surface`]: masses, control areas, rim/bud forces and the joint MLS
+//!   Laplacian of the particles (eqs. 14–17, Appendix D);
+//! - [`faces`]: the constraint faces K and the interpolation J (eq. 18);
+//! - [`system`]: eq. (24) as the paper writes it (`Method::Monolithic`), or
+//!   with λ eliminated exactly (`Method::Schur`), both solved with
+//!   BiCGSTAB + ILU(0) at the scene's tolerance (paper: 1e-9).
+//!
+//! Both methods give the same face velocities, pressures and particle
+//! velocities up to the solver tolerance; the reduced one is smaller (no λ
+//! rows) and better conditioned (`codimfx bench coupling` compares them on
+//! the same state, `docs/benchmarks.md`). Without constraint faces the
+//! blocks decouple: the pressure is solved alone with PCG/MIC(0) and the
+//! particles with the tension solve of §6, so no coupling rows are built.
+
+pub mod codim;
+pub mod faces;
+pub mod surface;
+pub mod system;
+
+use crate::grid::extrapolate::{constrain_solids, extrapolate};
+use crate::grid::pcg::{NotFinite, PcgParams};
+use crate::grid::projection::{project_liquid, Poisson};
+use crate::grid::MacGrid;
+use crate::linsolve::{bicgstab, BicgstabParams, Csr, Ilu0, SolveError};
+use crate::math::{Real, Vec3};
+use crate::mls::{FitStats, MlsError};
+use crate::particles::Particles;
+use crate::solids::SolidSet;
+use crate::tension::{solve as solve_tension, TensionSystem};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+pub use surface::{SurfaceCounts, SurfaceParams};
+use system::{assemble, Form, Scalars};
+
+/// How the coupled system is solved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// eq. (24) as one system [p, u₁, u₂, λ] (the paper).
+    #[default]
+    Monolithic,
+    /// λ eliminated: [u₁, u₂, p].
+    Schur,
+}
+
+/// Parameters of the coupled solve.
+#[derive(Clone, Debug)]
+pub struct CouplingParams {
+    /// Which system to solve.
+    pub method: Method,
+    /// BiCGSTAB stopping rule (paper: 1e-9 relative).
+    pub solver: BicgstabParams,
+    /// Particle side.
+    pub surface: SurfaceParams,
+    /// Pressure PCG rule, used when there are no constraint faces.
+    pub pressure: PcgParams,
+    /// Codimension transitions after each advection (§8); `None` keeps
+    /// every particle's codimension.
+    pub transitions: Option<crate::transition::TransitionParams>,
+    /// Also evaluate the residual of the full eq. (24) for the solution
+    /// (assembles the monolithic matrix when the Schur method ran).
+    pub verify: bool,
+}
+
+/// What a coupled solve did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CouplingInfo {
+    /// Liquid cells (pressure unknowns).
+    pub cells: usize,
+    /// Sheet + filament particles.
+    pub particles: usize,
+    /// Constraint faces (λ unknowns of eq. 24).
+    pub faces: usize,
+    /// Unknowns of the system solved.
+    pub unknowns: usize,
+    /// Non-zeros of its matrix.
+    pub nonzeros: usize,
+    /// BiCGSTAB iterations.
+    pub iterations: usize,
+    /// True relative residual of the solved system.
+    pub rel_residual: Real,
+    /// Relative residual of eq. (24) itself (when verified).
+    pub eq24_residual: Option<Real>,
+    /// Particle side: areas, forces, Laplacian (s).
+    pub operators_s: Real,
+    /// Assembly of the system (s).
+    pub assemble_s: Real,
+    /// ILU(0) factorisation (s).
+    pub factor_s: Real,
+    /// BiCGSTAB (s).
+    pub solve_s: Real,
+    /// Ghost-fluid θ clamps.
+    pub theta_clamps: usize,
+    /// Mean pressure (Pa) of the liquid cells deeper than 1.5 Δx below the
+    /// surface (0 if none): the Young–Laplace jump of a droplet at rest.
+    pub interior_pressure: Real,
+    /// Particle classification.
+    pub counts: SurfaceCounts,
+    /// MLS fits.
+    pub fits: FitStats,
+}
+
+/// Why a coupled solve failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CouplingError {
+    /// The MLS operators could not be built.
+    #[error("MLS operators of the sheet/filament particles: {0}")]
+    Mls(#[from] MlsError),
+    /// A linear solve failed.
+    #[error("{stage}: {source}")]
+    Solve {
+        /// Which solve.
+        stage: &'static str,
+        /// Why.
+        source: SolveError,
+    },
+    /// The uncoupled pressure solve failed.
+    #[error("pressure projection: {0}")]
+    Pressure(NotFinite),
+}
+
+fn solve_err(stage: &'static str) -> impl Fn(SolveError) -> CouplingError {
+    move |source| CouplingError::Solve { stage, source }
+}
+
+/// Algorithm 1 step 7 with surface tension: solves the coupled system,
+/// writes the projected face velocities into `grid.u` (extended `layers`
+/// layers, free slip in solids) and u^{n+1} into the sheet and filament
+/// particles of `parts`.
+pub fn solve(
+    grid: &mut MacGrid,
+    solids: &SolidSet,
+    parts: &mut Particles,
+    prm: &CouplingParams,
+    dt: Real,
+    layers: usize,
+) -> Result<CouplingInfo, CouplingError> {
+    let mut info = CouplingInfo::default();
+    let t = Instant::now();
+    let surf = surface::build(parts, &prm.surface)?;
+    info.operators_s = t.elapsed().as_secs_f64();
+    info.particles = surf.len();
+    info.counts = surf.counts;
+    info.fits = surf.fits;
+    let t = Instant::now();
+    let full = Poisson::build(grid, solids, |_, _| false);
+    let k = faces::constraints(grid, &full, &surf.nb.x[..surf.n_sheet()]);
+    info.cells = full.cells.len();
+    info.faces = k.len();
+    info.theta_clamps = full.theta_clamps;
+    let sc = Scalars {
+        dt,
+        sigma: prm.surface.sigma,
+        density: prm.surface.density,
+        dx: grid.dx,
+    };
+    if k.is_empty() {
+        // no coupling rows: the two blocks are independent
+        info.assemble_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let p =
+            project_liquid(grid, solids, prm.pressure, layers).map_err(CouplingError::Pressure)?;
+        info.iterations = p.solve.iterations as usize;
+        info.rel_residual = p.solve.rel_residual;
+        if !surf.is_empty() {
+            let sys = TensionSystem {
+                laplacian: surf.laplacian.as_ref(),
+                mass: &surf.mass,
+                area: &surf.area,
+                x: &surf.nb.x,
+                u: &surf.u,
+                f_explicit: &surf.force,
+                fixed: &surf.fixed,
+                sigma: prm.surface.sigma,
+                dt,
+            };
+            let sol = solve_tension(&sys, &prm.solver).map_err(solve_err("surface tension"))?;
+            info.iterations += sol.info.iter().map(|s| s.iterations).sum::<usize>();
+            info.rel_residual = sol
+                .info
+                .iter()
+                .fold(info.rel_residual, |m, s| m.max(s.rel_residual));
+            write_back(parts, &surf, &sol.u);
+        }
+        info.solve_s = t.elapsed().as_secs_f64();
+        return Ok(info);
+    }
+    let vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
+    let (form, reduced) = match prm.method {
+        Method::Monolithic => (Form::Monolithic, None),
+        Method::Schur => (
+            Form::Reduced,
+            Some(Poisson::build(grid, solids, |a, s| k.index(a, s).is_some())),
+        ),
+    };
+    let sys = assemble(
+        form,
+        reduced.as_ref().unwrap_or(&full),
+        &surf,
+        &k,
+        &vstar,
+        sc,
+    )
+    .map_err(solve_err("coupled system assembly"))?;
+    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
+    info.unknowns = a.nrows;
+    info.nonzeros = a.val.len();
+    info.assemble_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let ilu = Ilu0::new(&a).map_err(solve_err("coupled system ILU(0)"))?;
+    info.factor_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let mut x = vec![0.0; a.nrows];
+    for (i, u) in surf.u.iter().enumerate() {
+        for d in 0..3 {
+            x[sys.uo + 3 * i + d] = u[d];
+        }
+    }
+    let s = bicgstab(&a, &sys.rhs, &mut x, &ilu, &prm.solver)
+        .map_err(solve_err("coupled system BiCGSTAB"))?;
+    info.iterations = s.iterations;
+    info.rel_residual = s.rel_residual;
+    info.solve_s = t.elapsed().as_secs_f64();
+    let q = &x[sys.qo..sys.qo + sys.nq];
+    let u: Vec<Vec3> = (0..sys.np)
+        .map(|i| {
+            Vec3::new(
+                x[sys.uo + 3 * i],
+                x[sys.uo + 3 * i + 1],
+                x[sys.uo + 3 * i + 2],
+            )
+        })
+        .collect();
+    // μ_f / θ_f: the impulse's velocity change on each constraint face
+    let dv: Vec<Real> = match form {
+        Form::Monolithic => (0..k.len())
+            .map(|f| x[sys.mo + f] / k.sides[f].theta)
+            .collect(),
+        Form::Reduced => (0..k.len())
+            .map(|f| {
+                let sd = k.sides[f];
+                let ql = sd.lo.map_or(0.0, |c| q[c as usize]);
+                let qh = sd.hi.map_or(0.0, |c| q[c as usize]);
+                k.interpolate(f, &u) - vstar[f] + (qh - ql) / sd.theta
+            })
+            .collect(),
+    };
+    info.interior_pressure = interior_pressure(&full, q, grid.dx, sc);
+    if prm.verify {
+        info.eq24_residual = Some(eq24_residual(&full, &surf, &k, &vstar, sc, q, &u, &dv)?);
+    }
+    let mut valid = full.apply(grid, q, |a, s| k.index(a, s).map_or(0.0, |f| dv[f]));
+    extrapolate(grid, &mut valid, layers);
+    constrain_solids(grid, solids);
+    // the surface layer of a volume moves with the liquid it bounds: its
+    // velocity is the projected grid velocity (its own u^{n+1} agrees with
+    // it through the constraint faces up to the modes that J averages out,
+    // which would otherwise drift the layer off the volume)
+    let mut u = u;
+    for (i, &s) in surf.nb.store.iter().enumerate() {
+        if surf.attached[i] {
+            u[i] = grid.velocity(&parts.x[s]);
+        }
+    }
+    write_back(parts, &surf, &u);
+    Ok(info)
+}
+
+/// Mean of p = q ρ Δx / Δt over cells with φ < −1.5 Δx.
+fn interior_pressure(full: &Poisson, q: &[Real], dx: Real, sc: Scalars) -> Real {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (i, &s) in full.cells.iter().enumerate() {
+        if full.phi[s] < -1.0 * dx {
+            sum += q[i];
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        sum / n as Real * sc.density * dx / sc.dt
+    }
+}
+
+/// ‖b − A x‖/‖b‖ of eq. (24) in the monolithic form for a solution given as
+/// (q, u, μ/θ).
+#[allow(clippy::too_many_arguments)]
+fn eq24_residual(
+    full: &Poisson,
+    surf: &surface::Surface,
+    k: &faces::Constraints,
+    vstar: &[Real],
+    sc: Scalars,
+    q: &[Real],
+    u: &[Vec3],
+    dv: &[Real],
+) -> Result<Real, CouplingError> {
+    let sys = assemble(Form::Monolithic, full, surf, k, vstar, sc)
+        .map_err(solve_err("eq. (24) residual"))?;
+    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
+    let mut x = vec![0.0; a.nrows];
+    x[..sys.nq].copy_from_slice(q);
+    for (i, v) in u.iter().enumerate() {
+        for d in 0..3 {
+            x[sys.uo + 3 * i + d] = v[d];
+        }
+    }
+    for f in 0..k.len() {
+        x[sys.mo + f] = dv[f] * k.sides[f].theta;
+    }
+    let mut ax = vec![0.0; a.nrows];
+    a.matvec(&x, &mut ax);
+    let r: Vec<Real> = sys.rhs.iter().zip(&ax).map(|(b, y)| b - y).collect();
+    let bn = crate::linsolve::norm(&sys.rhs);
+    Ok(if bn > 0.0 {
+        crate::linsolve::norm(&r) / bn
+    } else {
+        crate::linsolve::norm(&r)
+    })
+}
+
+/// u^{n+1} and the updated radii into the store (fixed particles keep theirs).
+fn write_back(parts: &mut Particles, surf: &surface::Surface, u: &[Vec3]) {
+    for (i, &s) in surf.nb.store.iter().enumerate() {
+        if !surf.fixed[i] {
+            parts.v[s] = u[i];
+        }
+        if let Some(r) = surf.radius[i] {
+            parts.radius[s] = r;
+        }
+    }
+}

@@ -1,0 +1,220 @@
+//! Assembly of the coupled system, eq. (24), and of its reduced form with
+//! the impulses eliminated (the Schur-complement variant).
+//!
+//! Scaled unknowns: q = Δt p / (ρ Δx) per liquid cell (m/s, the grid's
+//! pressure scaling), u per sheet/filament particle (m/s, three rows each,
+//! interleaved), and μ_f = λ_f / (ρ Δx³ w_f) per constraint face (m/s: the
+//! impulse per unit face mass). With m̂ = m/(ρΔx³), ĉ = σΔt²S/(ρΔx³) and
+//! s_{c,f} = +1 when c is the cell below face f, −1 above it:
+//!
+//! - cell c (eq. 20):    A q + Σ_f s_{c,f} (w_f/θ_f) μ_f = b_c
+//! - particle (i, d) (eqs. 21/22, negated as in eq. 24):
+//!   −m̂_i u_{i,d} + ĉ_i Σ_j L_ij u_{j,d} − Σ_{f: axis d} J_{f,i} w_f μ_f
+//!   = −[m u** + Δt (σ S L x + f_explicit)]_{i,d} / (ρΔx³)
+//! - face f (eq. 23, times w_f):
+//!   Σ_c s_{c,f} (w_f/θ_f) q_c + (w_f/θ_f) μ_f − w_f (J u)_f = −w_f v**_f
+//!
+//! so that the face velocity after the solve is v_f = v**_f − (Gq)_f + μ_f/θ_f
+//! = (J u)_f: a face next to the free surface carries the liquid fraction θ
+//! of its mass (the ghost-fluid reading of M₍₀₎). The q–μ and u–μ blocks are
+//! each other's transposes, as in eq. (24); only the MLS Laplacian is
+//! non-symmetric. Fixed particles get identity rows.
+//!
+//! Eliminating μ with the face rows (μ_f/θ_f = (Ju)_f − v**_f + (Gq)_f)
+//! leaves [q, u] with A' (A without the constraint faces: they become
+//! Neumann faces whose flux is the particles'), the coupling s_{c,f} w_f J
+//! in both off-diagonal blocks, and the particle block
+//! −m̂ + ĉ L − Jᵀ W Θ J (the sheet drags the face masses it drives).
+
+use super::faces::Constraints;
+use super::surface::Surface;
+use crate::grid::projection::Poisson;
+use crate::grid::NONE;
+use crate::linsolve::{Csr, SolveError};
+use crate::math::{Real, Vec3};
+use faer::sparse::{SparseRowMat, Triplet};
+
+/// Physical scalars of the solve.
+#[derive(Clone, Copy, Debug)]
+pub struct Scalars {
+    /// Substep Δt (s).
+    pub dt: Real,
+    /// Surface tension σ (N/m).
+    pub sigma: Real,
+    /// Density ρ (kg/m³).
+    pub density: Real,
+    /// Cell size Δx (m).
+    pub dx: Real,
+}
+
+/// Which system to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Form {
+    /// eq. (24): [q, u, μ].
+    Monolithic,
+    /// μ eliminated: [q, u].
+    Reduced,
+}
+
+/// A sparse system and its right-hand side.
+pub struct Assembled {
+    /// The matrix.
+    pub matrix: SparseRowMat<usize, Real>,
+    /// Right-hand side.
+    pub rhs: Vec<Real>,
+    /// Offset of the q block.
+    pub qo: usize,
+    /// Offset of the u block (three rows per particle, interleaved).
+    pub uo: usize,
+    /// Offset of the μ block.
+    pub mo: usize,
+    /// Liquid cells.
+    pub nq: usize,
+    /// Particles.
+    pub np: usize,
+    /// Constraint faces (0 in the reduced form).
+    pub nk: usize,
+}
+
+/// Entries of the pressure block (symmetric 7-point stencil).
+/// The diagonal is always stored (it may be 0 in the reduced form).
+fn pressure_block(sys: &Poisson, qo: usize, t: &mut Vec<Triplet<usize, usize, Real>>) {
+    let a = &sys.a;
+    for i in 0..a.len() {
+        t.push(Triplet::new(qo + i, qo + i, a.diag[i]));
+        for d in 0..3 {
+            let u = a.up[i][d];
+            if u != NONE {
+                let u = qo + u as usize;
+                t.push(Triplet::new(qo + i, u, a.off[i][d]));
+                t.push(Triplet::new(u, qo + i, a.off[i][d]));
+            }
+        }
+    }
+}
+
+/// (cell, s_{c,f}) of the liquid cells next to constraint face f.
+fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> + '_ {
+    let s = k.sides[f];
+    s.lo.map(|c| (c as usize, 1.0))
+        .into_iter()
+        .chain(s.hi.map(|c| (c as usize, -1.0)))
+}
+
+/// Assembles the chosen form. `sys` is the pressure system built without
+/// (monolithic) or with (reduced) the constraint faces skipped; `vstar`
+/// holds v**_f of each constraint face.
+///
+/// Unknown order: monolithic [q, u, μ] as eq. (24) writes it; reduced
+/// [u, q], so that ILU(0) meets the particle pivots first and the cells
+/// whose every face is a constraint face (a zero diagonal in A') receive
+/// their pivot from the eliminated particle block.
+pub fn assemble(
+    form: Form,
+    sys: &Poisson,
+    surf: &Surface,
+    k: &Constraints,
+    vstar: &[Real],
+    sc: Scalars,
+) -> Result<Assembled, SolveError> {
+    let nq = sys.a.len();
+    let np = surf.len();
+    let nk = if form == Form::Monolithic { k.len() } else { 0 };
+    let n = nq + 3 * np + nk;
+    let (qo, uo, mo) = match form {
+        Form::Monolithic => (0, nq, nq + 3 * np),
+        Form::Reduced => (3 * np, 0, n),
+    };
+    let vol = sc.density * sc.dx.powi(3);
+    let l = Csr::from_faer(surf.laplacian.as_ref())?;
+    let mut t: Vec<Triplet<usize, usize, Real>> =
+        Vec::with_capacity(7 * nq + 3 * l.val.len() + 4 * k.col.len() + 4 * k.len());
+    let mut rhs = vec![0.0; n];
+    pressure_block(sys, qo, &mut t);
+    rhs[qo..qo + nq].copy_from_slice(&sys.b);
+    // (L x)_i projected on the normal space: the explicit part of the tension
+    let mut lx = vec![Vec3::zeros(); np];
+    for (i, out) in lx.iter_mut().enumerate() {
+        let mut v = Vec3::zeros();
+        for kk in l.row_ptr[i]..l.row_ptr[i + 1] {
+            v += surf.nb.x[l.col[kk]] * l.val[kk];
+        }
+        *out = surf.normal_curvature(i, &v);
+    }
+    // particle rows
+    for i in 0..np {
+        let mh = surf.mass[i] / vol;
+        for d in 0..3 {
+            let r = uo + 3 * i + d;
+            t.push(Triplet::new(r, r, -mh));
+            if surf.fixed[i] {
+                rhs[r] = -mh * surf.u[i][d];
+                continue;
+            }
+            let ch = sc.sigma * sc.dt * sc.dt * surf.area[i] / vol;
+            for kk in l.row_ptr[i]..l.row_ptr[i + 1] {
+                t.push(Triplet::new(r, uo + 3 * l.col[kk] + d, ch * l.val[kk]));
+            }
+            rhs[r] = -(surf.mass[i] * surf.u[i][d]
+                + sc.dt * (sc.sigma * surf.area[i] * lx[i][d] + surf.force[i][d]))
+                / vol;
+        }
+    }
+    // coupling through the constraint faces
+    for f in 0..k.len() {
+        let a = k.faces[f].0;
+        let w = k.weight[f];
+        let th = k.sides[f].theta;
+        match form {
+            Form::Monolithic => {
+                let m = mo + f;
+                t.push(Triplet::new(m, m, w / th));
+                rhs[m] = -w * vstar[f];
+                for (c, s) in face_cells(k, f) {
+                    t.push(Triplet::new(qo + c, m, s * w / th));
+                    t.push(Triplet::new(m, qo + c, s * w / th));
+                }
+                for (i, j) in k.row(f) {
+                    let r = uo + 3 * i + a;
+                    t.push(Triplet::new(m, r, -w * j));
+                    if !surf.fixed[i] {
+                        t.push(Triplet::new(r, m, -w * j));
+                    }
+                }
+            }
+            Form::Reduced => {
+                for (c, s) in face_cells(k, f) {
+                    for (i, j) in k.row(f) {
+                        let r = uo + 3 * i + a;
+                        t.push(Triplet::new(qo + c, r, s * w * j));
+                        if !surf.fixed[i] {
+                            t.push(Triplet::new(r, qo + c, s * w * j));
+                        }
+                    }
+                }
+                for (i, ji) in k.row(f) {
+                    if surf.fixed[i] {
+                        continue;
+                    }
+                    let r = uo + 3 * i + a;
+                    rhs[r] -= ji * w * th * vstar[f];
+                    for (jdx, jj) in k.row(f) {
+                        t.push(Triplet::new(r, uo + 3 * jdx + a, -ji * w * th * jj));
+                    }
+                }
+            }
+        }
+    }
+    let matrix = SparseRowMat::try_new_from_triplets(n, n, &t)
+        .map_err(|e| SolveError::Dimension(format!("{e:?}")))?;
+    Ok(Assembled {
+        matrix,
+        rhs,
+        qo,
+        uo,
+        mo,
+        nq,
+        np,
+        nk,
+    })
+}
