@@ -97,7 +97,7 @@ pub struct CouplingInfo {
     pub solve_s: Real,
     /// Ghost-fluid θ clamps.
     pub theta_clamps: usize,
-    /// Mean pressure (Pa) of the liquid cells deeper than 1.5 Δx below the
+    /// Mean pressure (Pa) of the liquid cells deeper than Δx below the
     /// surface (0 if none): the Young–Laplace jump of a droplet at rest.
     pub interior_pressure: Real,
     /// Particle classification.
@@ -272,11 +272,11 @@ pub fn solve(
     Ok(info)
 }
 
-/// Mean of p = q ρ Δx / Δt over cells with φ < −1.5 Δx.
+/// Mean of p = q ρ Δx / Δt over cells with φ < −Δx.
 fn interior_pressure(full: &Poisson, q: &[Real], dx: Real, sc: Scalars) -> Real {
     let (mut sum, mut n) = (0.0, 0usize);
     for (i, &s) in full.cells.iter().enumerate() {
-        if full.phi[s] < -1.0 * dx {
+        if full.phi[s] < -dx {
             sum += q[i];
             n += 1;
         }

@@ -109,6 +109,7 @@ fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> 
 /// [u, q], so that ILU(0) meets the particle pivots first and the cells
 /// whose every face is a constraint face (a zero diagonal in A') receive
 /// their pivot from the eliminated particle block.
+#[allow(clippy::needless_range_loop)]
 pub fn assemble(
     form: Form,
     sys: &Poisson,
