@@ -4,51 +4,30 @@
 //! the Schur-complement solves.
 
 use codimfx::coupling::Method;
-use codimfx::grid::MacGrid;
 use codimfx::math::Real;
 use codimfx::particles::Codim;
-use codimfx::scene::{load_str, sample_bodies};
-use codimfx::solids::SolidSet;
-use codimfx::step::{coupling_params, step, SimState, StageTimes, StepParams};
+use codimfx::step::{step, SimState, StageTimes, StepParams};
+use codimfx::validate::droplet::DropletCase;
 
 const R: Real = 0.0128;
 const SIGMA: Real = 0.03;
 
-/// A resting droplet of radius R without gravity, sampled on concentric
-/// shells at spacing Δx/4 (Appendix F) with the outer shell as sheet
-/// particles, and the step parameters with surface tension σ.
-fn droplet(dx: Real, method: Method) -> (SimState, StepParams) {
-    let l = 2.5 * R;
-    let yaml = format!(
-        "version: 1\ndomain: {{min: [{m},{m},{m}], max: [{l},{l},{l}], dx: {dx}}}\n\
-         time: {{fps: 30, frames: 1}}\nphysics: {{gravity: [0,0,0]}}\n\
-         solver: {{surface_radius: 1.0}}\n\
-         bodies:\n  - {{kind: sphere, center: [0,0,0], radius: {R}, spacing: 0.25}}\n",
-        m = -l
-    );
-    let mut scene = load_str(&yaml, std::path::Path::new("droplet.yaml")).unwrap();
-    let solids = SolidSet::from_scene(&scene.solids);
-    let (mut parts, _) = sample_bodies(&scene, &solids);
-    let s = 0.25 * dx;
-    for i in 0..parts.len() {
-        if parts.x[i].norm() > R - 0.75 * s {
-            parts.codim[i] = Codim::Sheet;
-        }
-    }
-    scene.physics.surface_tension = SIGMA;
-    let mut prm = StepParams::from_scene(&scene);
-    let mut cp = coupling_params(&scene);
-    cp.method = method;
-    cp.verify = true;
-    prm.coupling = Some(cp);
-    let grid = MacGrid::new(prm.lo, prm.hi, dx);
-    (SimState::new(parts, grid, solids), prm)
+/// The paper's resting droplet at R/Δx = `cells`, eq. (24) residual checked.
+fn droplet(cells: Real, method: Method) -> (SimState, StepParams) {
+    let case = DropletCase {
+        method,
+        ..DropletCase::paper(cells)
+    };
+    assert_eq!((case.radius, case.sigma), (R, SIGMA));
+    let (st, mut prm) = case.build().unwrap();
+    prm.coupling.as_mut().unwrap().verify = true;
+    (st, prm)
 }
 
 #[test]
 fn resting_droplet_has_the_young_laplace_jump() {
     // R = 8 Δx
-    let (mut st, prm) = droplet(R / 8.0, Method::Monolithic);
+    let (mut st, prm) = droplet(8.0, Method::Monolithic);
     let yl = 2.0 * SIGMA / R;
     for _ in 0..2 {
         let info = step(&mut st, &prm, 0.003, &mut StageTimes::default()).unwrap();
@@ -67,7 +46,7 @@ fn resting_droplet_has_the_young_laplace_jump() {
 #[test]
 fn resting_droplet_spurious_currents_stay_below_a_millimetre_per_second() {
     // R = 4 Δx, Δt = 0.01 s, 1 s
-    let (mut st, prm) = droplet(R / 4.0, Method::Monolithic);
+    let (mut st, prm) = droplet(4.0, Method::Monolithic);
     let mass0 = st.particles.total_mass();
     let n0 = st.particles.len();
     let mut vmax: Real = 0.0;
@@ -91,8 +70,8 @@ fn resting_droplet_spurious_currents_stay_below_a_millimetre_per_second() {
 
 #[test]
 fn monolithic_and_schur_solves_agree() {
-    let (mut a, pa) = droplet(R / 4.0, Method::Monolithic);
-    let (mut b, pb) = droplet(R / 4.0, Method::Schur);
+    let (mut a, pa) = droplet(4.0, Method::Monolithic);
+    let (mut b, pb) = droplet(4.0, Method::Schur);
     // a non-trivial state: one step from rest, then compare the second
     for _ in 0..2 {
         let ia = step(&mut a, &pa, 0.003, &mut StageTimes::default()).unwrap();

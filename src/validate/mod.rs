@@ -12,6 +12,7 @@
 
 pub mod butterfly;
 pub mod curvature;
+pub mod droplet;
 pub mod sampling;
 pub mod sphere_diffusion;
 pub mod time;

@@ -1,6 +1,8 @@
 //! `codimfx bench …`: one file per benchmark target.
 use clap::{Args, Subcommand};
 
+mod accuracy;
+mod coupling;
 mod films;
 mod neighbors;
 mod operators;
@@ -24,6 +26,10 @@ enum BenchTarget {
     Volume(volume::VolumeArgs),
     /// Film step on the paper's bursting bubble and catenoid: s per step per stage.
     Films(films::FilmsArgs),
+    /// Coupled solve, eq. (24): monolithic against Schur complement on resting droplets.
+    Coupling(coupling::CouplingArgs),
+    /// Run time against error: l = 2 droplet oscillation period against Rayleigh's.
+    Accuracy(accuracy::AccuracyArgs),
     /// Surfacer on a ~860k-particle blob: time, peak memory, triangles (and splashsurf if on PATH).
     Surface(surface::SurfaceBenchArgs),
 }
@@ -36,5 +42,7 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
         BenchTarget::Volume(x) => volume::run(x),
         BenchTarget::Surface(x) => surface::run(x),
         BenchTarget::Films(x) => films::run(x),
+        BenchTarget::Coupling(x) => coupling::run(x),
+        BenchTarget::Accuracy(x) => accuracy::run(x),
     }
 }

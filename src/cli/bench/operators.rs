@@ -75,10 +75,10 @@ fn cpu_of(reps: usize, mut f: impl FnMut()) -> Option<Real> {
 }
 
 /// One point of the error/time table.
-struct Point {
-    series: usize,
-    seconds: Real,
-    error: Real,
+pub(super) struct Point {
+    pub(super) series: usize,
+    pub(super) seconds: Real,
+    pub(super) error: Real,
 }
 
 /// Runs the benchmark and prints markdown tables.
@@ -227,7 +227,7 @@ pub fn run(a: OperatorsArgs) -> Result<()> {
 
 /// Draws a log–log scatter with lines joining each series, grid lines at
 /// every decade, to a PNG.
-fn plot(path: &PathBuf, pts: &[Point], colors: &[[u8; 3]]) -> Result<()> {
+pub(super) fn plot(path: &PathBuf, pts: &[Point], colors: &[[u8; 3]]) -> Result<()> {
     use image::{Rgb, RgbImage};
     let (w, h, m) = (900u32, 600u32, 50i64);
     let mut img = RgbImage::from_pixel(w, h, Rgb([255, 255, 255]));

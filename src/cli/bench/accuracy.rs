@@ -1,0 +1,79 @@
+//! `codimfx bench accuracy`: run time against error of the coupled solver
+//! (paper §7) on the l = 2 oscillation of a droplet without gravity
+//! (R = 0.0128 m, σ = 0.03 N/m, elongation 5 %): the measured period
+//! against Rayleigh's 2π/ω, ω² = 8σ/(ρR³), at several resolutions R/Δx and
+//! two substeps, with the wall time of each run. `--plot FILE.png` draws
+//! |period error| against wall time (log–log, one series per substep).
+use super::operators::{plot, Point};
+use anyhow::Result;
+use clap::Args;
+use codimfx::validate::droplet::{oscillate, DropletCase};
+use codimfx::Real;
+use std::path::PathBuf;
+
+/// Arguments of `codimfx bench accuracy`.
+#[derive(Args, Debug)]
+pub struct AccuracyArgs {
+    /// Resolutions R/Δx.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![3.0, 4.0, 6.0])]
+    cells: Vec<Real>,
+    /// Substeps Δt (s).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![0.01, 0.005])]
+    dt: Vec<Real>,
+    /// Level-set radius of the volume particles relative to Δx.
+    #[arg(long, default_value_t = 1.0)]
+    surface_radius: Real,
+    /// Write the error-against-time chart to this PNG.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+/// Runs the benchmark and prints a markdown table.
+pub fn run(a: AccuracyArgs) -> Result<()> {
+    println!("threads: {}\n", rayon::current_num_threads());
+    println!(
+        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx)\n",
+        a.surface_radius
+    );
+    println!(
+        "| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | wall (s) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    let mut points = Vec::new();
+    for (series, &dt) in a.dt.iter().enumerate() {
+        for &cells in &a.cells {
+            let case = DropletCase {
+                surface_radius: a.surface_radius,
+                elongation: 0.05,
+                ..DropletCase::paper(cells)
+            };
+            let o = oscillate(&case, dt)?;
+            println!(
+                "| {cells} | {dt} | {} | {} | {:.4} | {:.4} | {:+.1} % | {:.1} |",
+                o.particles,
+                o.steps,
+                o.period,
+                o.rayleigh,
+                100.0 * o.error,
+                o.wall_s
+            );
+            points.push(Point {
+                series,
+                seconds: o.wall_s,
+                error: o.error.abs(),
+            });
+        }
+    }
+    if let Some(path) = &a.plot {
+        let colors = [[200, 40, 40], [40, 80, 200], [40, 160, 60], [160, 100, 20]];
+        plot(path, &points, &colors[..a.dt.len().min(4)])?;
+        println!(
+            "\nplot: {} (x: wall seconds, y: |period error|, log–log)",
+            path.display()
+        );
+        for (i, dt) in a.dt.iter().enumerate().take(4) {
+            println!("  series Δt = {dt} s: rgb{:?}", colors[i]);
+        }
+    }
+    Ok(())
+}
