@@ -66,6 +66,16 @@ fn jets_emit_exact_layers_and_resume_byte_identically() {
             "frame {f} differs between the straight and the resumed run"
         );
     }
+    // resuming from an empty frame 0 (the jet has not started yet)
+    let c = dir.path().join("c");
+    run(&scene, &c, 0, false, None);
+    run(&scene, &c, 2, true, None);
+    for f in 0..=2 {
+        let name = ply::frame_name(f);
+        let x = std::fs::read(a.join("jet").join(&name)).unwrap();
+        let y = std::fs::read(c.join("jet").join(&name)).unwrap();
+        assert!(x == y, "frame {f} differs after resuming from frame 0");
+    }
     let m = Manifest::read(&a.join("jet/manifest.json")).unwrap();
     let (mb, jet) = (
         Manifest::read(&b.join("jet/manifest.json")).unwrap(),

@@ -3,7 +3,7 @@
 //! Table 1 (#C0, #C1), and the jet scenes emit the paper's flux. Counts are
 //! printed (`cargo test --release --test presets -- --nocapture`).
 use codimfx::particles::{Codim, Particles};
-use codimfx::scene::{load, sample_bodies, sample_films, Scene};
+use codimfx::scene::{load, load_str_scaled, sample_bodies, sample_films, Scene};
 use codimfx::solids::SolidSet;
 use std::path::{Path, PathBuf};
 
@@ -132,5 +132,43 @@ fn the_polygon_presets_modulate_the_rim_with_6_and_8_corners() {
         let (kk, a, c) = prm.rim_modulation.unwrap();
         assert_eq!((kk, a), (k, m.amplitude));
         assert_eq!(c, codimfx::math::Vec3::from(m.center));
+    }
+}
+
+#[test]
+fn every_preset_runs_at_half_resolution_with_fewer_particles() {
+    // `--scale 2`: dx doubles, spacings follow; volumes hold ~1/8 of the
+    // particles, films ~1/4, jets emit ~1/8 per second
+    for p in presets() {
+        let text = std::fs::read_to_string(&p).unwrap();
+        let full = load(&p).unwrap();
+        let half = load_str_scaled(&text, &p, 2.0).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(half.domain.dx, 2.0 * full.domain.dx);
+        let (a, b) = (initial(&full).len() as f64, initial(&half).len() as f64);
+        if a > 0.0 {
+            let want = if full.has_liquid() { 8.0 } else { 4.0 };
+            let r = a / b;
+            assert!(
+                r > 0.7 * want && r < 1.3 * want,
+                "{}: {a} -> {b} particles, ratio {r:.2} (expected ~{want})",
+                p.display()
+            );
+        }
+        let rate = |s: &Scene| {
+            let mut e = Particles::new();
+            for j in &s.jets {
+                j.emitter(s.domain.dx, s.physics.density)
+                    .emit(0.0, 1.0, &mut e);
+            }
+            e.len() as f64
+        };
+        if !full.jets.is_empty() {
+            let r = rate(&full) / rate(&half);
+            assert!(
+                r > 5.6 && r < 10.4,
+                "{}: jet rate ratio {r:.2}",
+                p.display()
+            );
+        }
     }
 }
