@@ -102,6 +102,18 @@ impl Jet {
     /// Emits the layers whose emission time lies in [t0, t1) into `parts`,
     /// advanced to t1. Returns the number of particles added.
     pub fn emit(&self, t0: Real, t1: Real, parts: &mut Particles) -> usize {
+        self.emit_placed(t0, t1, t1, parts)
+    }
+
+    /// Emits the layers whose emission time t_e lies in [t0, t1), each placed
+    /// where free flight puts it at time `t_at`: nozzle + d v (t_at − t_e).
+    /// With `t_at = t0` the layers are created before a substep [t0, t1) at
+    /// positions up to v (t1 − t0) behind the nozzle, and the substep's
+    /// advection carries them to where [`Jet::emit`] would put them at t1
+    /// (the frame loop of `sim` does this, so new particles take part in the
+    /// substep's grid solve). Which layers are emitted depends only on t0 and
+    /// t1 ([`Jet::layers_by`]), so a resumed run emits the same particles.
+    pub fn emit_placed(&self, t0: Real, t1: Real, t_at: Real, parts: &mut Particles) -> usize {
         let (k0, k1) = (self.layers_by(t0), self.layers_by(t1));
         let d = self.direction.normalize();
         let (e1, e2) = basis(&d);
@@ -110,7 +122,7 @@ impl Jet {
         let mut added = 0;
         for k in k0..k1 {
             let te = self.start + k as Real * self.period();
-            let centre = self.origin + v * (t1 - te);
+            let centre = self.origin + v * (t_at - te);
             let phase = if k % 2 == 0 { 0.0 } else { 0.5 };
             for (o, outline) in circle_pattern(self.radius, self.spacing, phase) {
                 let x = centre + e1 * o[0] + e2 * o[1];
@@ -202,10 +214,30 @@ mod tests {
             .x
             .iter()
             .all(|x| x.x.hypot(x.z) <= 0.008 + 1e-12 && x.y <= 0.1));
-        assert!(
-            one.codim.iter().any(|c| *c == Codim::Sheet)
-                && one.codim.iter().any(|c| *c == Codim::Volume)
-        );
+        assert!(one.codim.contains(&Codim::Sheet) && one.codim.contains(&Codim::Volume));
+    }
+
+    #[test]
+    fn emission_before_the_substep_lands_where_emission_after_it_does() {
+        let j = jet();
+        let (t0, t1) = (0.1, 0.2);
+        let mut after = Particles::new();
+        let n = j.emit(t0, t1, &mut after);
+        let mut before = Particles::new();
+        assert_eq!(j.emit_placed(t0, t1, t0, &mut before), n);
+        assert!(n > 0 && n.is_multiple_of(circle_pattern(j.radius, j.spacing, 0.0).len()));
+        for k in 0..n {
+            // free flight over the substep
+            let x = before.x[k] + before.v[k] * (t1 - t0);
+            assert!((x - after.x[k]).norm() < 1e-15);
+            // placed no further than one substep of flight behind the nozzle
+            let behind = (before.x[k] - j.origin).dot(&j.direction);
+            assert!(behind <= 1e-15 && behind >= -j.speed * (t1 - t0) - 1e-15);
+        }
+        // layer count from time alone: ⌈(t − start)/T⌉ layers by t
+        assert_eq!(j.layers_by(0.1), (0.1 / j.period()).ceil() as u64);
+        assert_eq!(j.layers_by(0.0), 0);
+        assert_eq!(j.layers_by(1e-12), 1);
     }
 
     #[test]

@@ -173,6 +173,44 @@ pub fn solid_points(solids: &[Solid], lo: Vec3, hi: Vec3, h: Real) -> Vec<Vec3> 
                     }
                 }
             }
+            Solid::Pipe {
+                center,
+                axis,
+                inner_radius,
+                outer_radius,
+                height,
+            } => {
+                let ax = v(axis).normalize();
+                let (a, b) = basis(ax);
+                let c = v(center);
+                let nr = ((2.0 * std::f64::consts::PI * outer_radius / h).ceil() as usize).max(12);
+                let nh = ((height / h).ceil() as usize).max(1);
+                let nw = (((outer_radius - inner_radius) / h).ceil() as usize).max(1);
+                for i in 0..nr {
+                    let t = 2.0 * std::f64::consts::PI * i as Real / nr as Real;
+                    let dir = a * t.cos() + b * t.sin();
+                    // inner and outer walls
+                    for r in [*inner_radius, *outer_radius] {
+                        for j in 0..=nh {
+                            let p = c + ax * (height * (j as Real / nh as Real - 0.5)) + dir * r;
+                            if inside(&p) {
+                                out.push(p);
+                            }
+                        }
+                    }
+                    // annular end faces
+                    for k in 0..=nw {
+                        let r =
+                            inner_radius + (outer_radius - inner_radius) * k as Real / nw as Real;
+                        for sgn in [-0.5, 0.5] {
+                            let p = c + ax * (height * sgn) + dir * r;
+                            if inside(&p) {
+                                out.push(p);
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
     out
@@ -304,6 +342,13 @@ mod tests {
             Solid::Plane {
                 point: [0.0, 0.1, 0.0],
                 normal: [0.0, 1.0, 0.0],
+            },
+            Solid::Pipe {
+                center: [0.7, 0.6, 0.7],
+                axis: [0.0, 1.0, 0.0],
+                inner_radius: 0.05,
+                outer_radius: 0.08,
+                height: 0.2,
             },
         ];
         let (lo, hi) = (Vec3::zeros(), Vec3::repeat(1.0));

@@ -10,6 +10,7 @@
 //! precision, `resume` continues from the last complete frame bit for bit.
 //! A stop flag (Ctrl-C in the binary) is checked after every frame.
 
+use crate::emitter::Jet;
 use crate::film::driver as film_driver;
 use crate::film::{FilmParams, FilmState};
 use crate::grid::MacGrid;
@@ -86,7 +87,7 @@ pub enum SimError {
 }
 
 /// How to run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct RunOptions {
     /// Parent folder of the cache (the scene's `output.dir`, else `cache`, when `None`).
     pub out_root: Option<PathBuf>,
@@ -94,6 +95,9 @@ pub struct RunOptions {
     pub frames: Option<u32>,
     /// Continue after the last complete frame of an existing cache.
     pub resume: bool,
+    /// Resolution scale: Δx × scale, particle spacings follow (relative to
+    /// Δx). `None`: 1 for a new run, the cache's scale when resuming.
+    pub scale: Option<Real>,
 }
 
 /// A run in progress.
@@ -120,6 +124,8 @@ pub struct Sim {
     pub dropped_in_solid: usize,
     /// Film-only scenes: the sheet/filament solver and its state (no grid).
     pub film: Option<(FilmParams, FilmState)>,
+    /// The scene's jets (their emission state is a function of time).
+    pub jets: Vec<Jet>,
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SimError + '_ {
@@ -164,6 +170,20 @@ fn base_record(frame: u32, time: Real, p: &Particles) -> FrameRecord {
     }
 }
 
+/// Emits every jet's layers of [t0, t1) before the substep [t0, t1), placed
+/// at their free-flight positions at t0 (the substep carries them on); keeps
+/// the APIC matrices aligned. Returns the number of particles added.
+fn emit_jets(jets: &[Jet], t0: Real, t1: Real, st: &mut SimState) -> usize {
+    let n: usize = jets
+        .iter()
+        .map(|j| j.emit_placed(t0, t1, t0, &mut st.particles))
+        .sum();
+    if n > 0 && !st.affine.is_empty() {
+        st.affine.resize(st.particles.len(), [Vec3::zeros(); 3]);
+    }
+    n
+}
+
 impl Sim {
     /// Loads the scene and either samples the initial state (writing frame 0)
     /// or, with `resume`, reads the last complete frame of the existing cache.
@@ -172,7 +192,15 @@ impl Sim {
             file: scene_file.to_path_buf(),
             source,
         })?;
-        let scene = scene::load_str(&text, scene_file)?;
+        Sim::open_text(&text, scene_file, opt)
+    }
+
+    /// [`Sim::open`] on scene text; `scene_file` names it in messages, in the
+    /// manifest and (its stem) as the default cache name.
+    pub fn open_text(text: &str, scene_file: &Path, opt: &RunOptions) -> Result<Sim, SimError> {
+        let text = text.to_string();
+        let mut scale = opt.scale.unwrap_or(1.0);
+        let mut scene = scene::load_str_scaled(&text, scene_file, scale)?;
         let name = scene.output.name.clone().unwrap_or_else(|| {
             scene_file
                 .file_stem()
@@ -184,15 +212,38 @@ impl Sim {
             .or_else(|| scene.output.dir.clone().map(PathBuf::from))
             .unwrap_or_else(|| PathBuf::from("cache"));
         let dir = root.join(&name);
+        let mpath = dir.join("manifest.json");
+        let sha = sha256_hex(&text);
+        let old = if opt.resume {
+            let m = Manifest::read(&mpath)?;
+            match opt.scale {
+                Some(s) if s != m.scale => {
+                    return Err(SimError::Resume {
+                        dir,
+                        reason: format!("the cache was written at --scale {}, not {s}", m.scale),
+                    })
+                }
+                None if m.scale != scale => {
+                    scale = m.scale;
+                    scene = scene::load_str_scaled(&text, scene_file, scale)?;
+                }
+                _ => {}
+            }
+            Some(m)
+        } else {
+            None
+        };
         let solids = SolidSet::from_scene(&scene.solids);
         let params = StepParams::from_scene(&scene);
         let d = &scene.domain;
         let grid = MacGrid::new(Vec3::from(d.min), Vec3::from(d.max), d.dx);
         let last_frame = opt.frames.unwrap_or(scene.time.frames);
-        let mpath = dir.join("manifest.json");
-        let sha = sha256_hex(&text);
-        if opt.resume {
-            let manifest = Manifest::read(&mpath)?;
+        let jets: Vec<Jet> = scene
+            .jets
+            .iter()
+            .map(|j| j.emitter(d.dx, scene.physics.density))
+            .collect();
+        if let Some(manifest) = old {
             if manifest.scene_sha256 != sha {
                 return Err(SimError::Resume {
                     dir,
@@ -228,13 +279,16 @@ impl Sim {
             };
             let mut manifest = manifest;
             manifest.frames.retain(|r| r.frame <= f);
-            let film = scene.bodies.is_empty().then(|| {
+            let film = (!scene.has_liquid()).then(|| {
                 let mut st = film_driver::initial_state(&scene);
                 if let (Some(g), Some(v0)) = (st.gas.as_mut(), rec.gas_v0) {
                     g.v0 = v0;
                 }
                 (film_driver::params_from_scene(&scene), st)
             });
+            // every frame ends at exactly t = f / fps; recomputing it avoids
+            // trusting a decimal round trip of the time through JSON
+            let time = f as Real / scene.time.fps;
             return Ok(Sim {
                 scene,
                 dir,
@@ -247,20 +301,21 @@ impl Sim {
                 params,
                 manifest,
                 frame: f,
-                time: rec.time,
+                time,
                 last_frame,
                 totals: StageTimes::default(),
                 dropped_in_solid: 0,
                 film,
+                jets,
             });
         }
-        let film_only = scene.bodies.is_empty();
+        let film_only = !scene.has_liquid();
         let (particles, rep) = if film_only {
             (sample_films(&scene), Default::default())
         } else {
             sample_bodies(&scene, &solids)
         };
-        if particles.is_empty() {
+        if particles.is_empty() && jets.is_empty() {
             return Err(SimError::NoLiquid {
                 file: scene_file.to_path_buf(),
                 dropped: rep.dropped_in_solid,
@@ -285,6 +340,7 @@ impl Sim {
             scene_yaml: text,
             fps: scene.time.fps,
             dx: d.dx,
+            scale,
             domain_min: d.min,
             domain_max: d.max,
             threads: rayon::current_num_threads(),
@@ -315,6 +371,7 @@ impl Sim {
             totals: StageTimes::default(),
             dropped_in_solid: rep.dropped_in_solid,
             film,
+            jets,
         })
     }
 
@@ -358,12 +415,19 @@ impl Sim {
                     self.scene.time.cfl,
                     self.scene.time.max_dt,
                 );
+                // particles about to leave a nozzle count in the CFL limit too
+                let v_jet = self.jets.iter().map(|j| j.speed).fold(0.0, Real::max);
+                if v_jet > 0.0 {
+                    dt = dt.min(self.scene.time.cfl * dx / v_jet);
+                }
                 let last = dt >= rem;
                 if last {
                     dt = rem;
                 } else if dt > 0.5 * rem {
                     dt = 0.5 * rem;
                 }
+                let t1 = if last { t_end } else { self.time + dt };
+                rec.emitted += emit_jets(&self.jets, self.time, t1, &mut self.state) as u64;
                 let info =
                     step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
                         SimError::Step {
@@ -372,7 +436,7 @@ impl Sim {
                             source,
                         }
                     })?;
-                self.time = if last { t_end } else { self.time + dt };
+                self.time = t1;
                 substeps += 1;
                 dt_min = dt_min.min(dt);
                 dt_max = dt_max.max(dt);

@@ -31,6 +31,20 @@ enum Shape {
         r: Real,
         half: Real,
     },
+    Pipe {
+        c: Vec3,
+        a: Vec3,
+        r_in: Real,
+        r_out: Real,
+        half: Real,
+    },
+}
+
+/// Signed distance to the rectangle |q.0| ≤ 0, |q.1| ≤ 0 given the signed
+/// slab distances q (exact for a solid of revolution in its meridian plane).
+fn rect(q0: Real, q1: Real) -> Real {
+    let (o0, o1) = (q0.max(0.0), q1.max(0.0));
+    (o0 * o0 + o1 * o1).sqrt() + q0.max(q1).min(0.0)
 }
 
 /// The union of the scene's static solids.
@@ -75,6 +89,19 @@ impl SolidSet {
                     r: *radius,
                     half: 0.5 * height,
                 },
+                Solid::Pipe {
+                    center,
+                    axis,
+                    inner_radius,
+                    outer_radius,
+                    height,
+                } => Shape::Pipe {
+                    c: v(center),
+                    a: v(axis).normalize(),
+                    r_in: *inner_radius,
+                    r_out: *outer_radius,
+                    half: 0.5 * height,
+                },
             })
             .collect();
         SolidSet { shapes }
@@ -100,11 +127,22 @@ impl SolidSet {
                 Shape::Cylinder { c, a, r, half } => {
                     let rel = x - c;
                     let t = rel.dot(a);
-                    let radial = (rel - a * t).norm() - r;
-                    let axial = t.abs() - half;
-                    let ox = radial.max(0.0);
-                    let oy = axial.max(0.0);
-                    (ox * ox + oy * oy).sqrt() + radial.max(axial).min(0.0)
+                    rect((rel - a * t).norm() - r, t.abs() - half)
+                }
+                Shape::Pipe {
+                    c,
+                    a,
+                    r_in,
+                    r_out,
+                    half,
+                } => {
+                    // the wall is the rectangle r_in ≤ ρ ≤ r_out, |t| ≤ half
+                    // in the meridian plane (ρ, t)
+                    let rel = x - c;
+                    let t = rel.dot(a);
+                    let rho = (rel - a * t).norm();
+                    let radial = (rho - 0.5 * (r_in + r_out)).abs() - 0.5 * (r_out - r_in);
+                    rect(radial, t.abs() - half)
                 }
             };
             d = d.min(e);
@@ -177,5 +215,54 @@ mod tests {
         let mut x = Vec3::new(0.1, 0.2, 0.0);
         assert!(s.push_out(&mut x, 1e-3, 1e-6));
         assert!(s.phi(&x) >= 1e-3 - 1e-9);
+    }
+
+    #[test]
+    fn pipe_distance_is_exact_around_the_wall() {
+        // nozzle along y: bore radius 1, wall to radius 1.5, from y = 1 to y = 3
+        let s = SolidSet::from_scene(&[Solid::Pipe {
+            center: [0.0, 2.0, 0.0],
+            axis: [0.0, -3.0, 0.0],
+            inner_radius: 1.0,
+            outer_radius: 1.5,
+            height: 2.0,
+        }]);
+        let phi = |x: Real, y: Real, z: Real| s.phi(&Vec3::new(x, y, z));
+        // on the axis (in the bore): distance to the inner wall
+        assert!((phi(0.0, 2.0, 0.0) - 1.0).abs() < 1e-12);
+        // inside the wall, middle of its thickness: −0.25
+        assert!((phi(1.25, 2.0, 0.0) + 0.25).abs() < 1e-12);
+        assert!((phi(0.0, 2.0, -1.25) + 0.25).abs() < 1e-12);
+        // near an end: closer to the rim face than to the sides
+        assert!((phi(1.25, 2.9, 0.0) + 0.1).abs() < 1e-12);
+        // outside, radially
+        assert!((phi(0.0, 2.0, 2.0) - 0.5).abs() < 1e-12);
+        // below the nozzle, in line with the wall: distance to the rim face
+        assert!((phi(1.2, 0.5, 0.0) - 0.5).abs() < 1e-12);
+        // below the nozzle on the axis: distance to the inner rim corner (ρ = 1, y = 1)
+        assert!((phi(0.0, 0.0, 0.0) - 2.0f64.sqrt()).abs() < 1e-12);
+        // liquid in the bore is not pushed out; a point in the wall is, to the nearer face
+        let mut x = Vec3::new(0.0, 2.0, 0.5);
+        assert!(!s.push_out(&mut x, 1e-3, 1e-6));
+        let mut x = Vec3::new(1.1, 2.0, 0.0);
+        assert!(s.push_out(&mut x, 1e-3, 1e-6));
+        assert!((x.x - (1.0 - 1e-3)).abs() < 1e-6, "{x:?}");
+        // gradient of a distance function has unit length away from the medial surfaces
+        for p in [
+            Vec3::new(0.3, 2.2, 0.1),
+            Vec3::new(1.7, 2.4, 0.2),
+            Vec3::new(1.3, 0.4, 0.1),
+        ] {
+            let g = Vec3::from_fn(|d, _| {
+                let mut e = Vec3::zeros();
+                e[d] = 1e-6;
+                (s.phi(&(p + e)) - s.phi(&(p - e))) / 2e-6
+            });
+            assert!(
+                (g.norm() - 1.0).abs() < 1e-6,
+                "{p:?}: |grad| = {}",
+                g.norm()
+            );
+        }
     }
 }

@@ -27,6 +27,7 @@ fn run(scene: &Path, out: &Path, frames: u32, resume: bool) -> Sim {
             out_root: Some(out.to_path_buf()),
             frames: Some(frames),
             resume,
+            scale: None,
         },
     )
     .unwrap();

@@ -99,8 +99,162 @@ fn physically_invalid_values_are_rejected_with_their_numbers() {
     check(&e, "domain.dx", 5, "positive");
     let e = err(&GOOD.replace("radius: 0.1\n", "radius: -0.1\n"));
     check(&e, "bodies[1].radius", 18, "-0.1");
-    let e = err(&GOOD.replace("  viscosity: 0", "  viscosity: 0\n  surface_tension: 0.07"));
-    check(&e, "physics.surface_tension", 12, "0.07");
+    let e = err(&GOOD.replace("  viscosity: 0", "  viscosity: 0\n  surface_tension: -0.07"));
+    check(&e, "physics.surface_tension", 12, "-0.07");
+    let e = err(&GOOD.replace("  viscosity: 0", "  viscosity: 0\n  surface_tension: .nan"));
+    check(&e, "physics.surface_tension", 12, "NaN");
+}
+
+#[test]
+fn liquids_with_surface_tension_load_with_a_surface_layer() {
+    let s = load_str(
+        &GOOD.replace("  viscosity: 0", "  viscosity: 0\n  surface_tension: 0.07"),
+        Path::new("scene.yaml"),
+    )
+    .unwrap();
+    assert_eq!(s.physics.surface_tension, 0.07);
+    assert!(s.bodies.iter().all(|b| b.surface_layer(0.07)));
+    // explicit off, and default off without tension
+    let s = load_str(
+        &GOOD.replace(
+            "    radius: 0.1\nsolids",
+            "    radius: 0.1\n    surface_layer: false\nsolids",
+        ),
+        Path::new("scene.yaml"),
+    )
+    .unwrap();
+    assert!(!s.bodies[1].surface_layer(0.07) && !s.bodies[0].surface_layer(0.0));
+    let e = err(&GOOD.replace(
+        "    radius: 0.1\nsolids",
+        "    radius: 0.1\n    surface_layer: maybe\nsolids",
+    ));
+    assert!(e.path().starts_with("bodies[1]"), "{e}");
+    assert!(e.to_string().contains("invalid type"), "{e}");
+    assert_eq!(e.location().unwrap().0, 16, "{e}");
+}
+
+const JET: &str = "\
+jets:
+  - origin: [0.5, 0.4, 0.25]
+    direction: [0, -1, 0]
+    radius: 0.05
+    speed: 0.1
+";
+
+fn with_jet(jet: &str) -> String {
+    format!("{GOOD}{jet}")
+}
+
+#[test]
+fn jets_load_with_defaults_and_bad_jets_are_rejected() {
+    let s = load_str(&with_jet(JET), Path::new("scene.yaml")).unwrap();
+    let j = &s.jets[0];
+    assert!((j.spacing - 1.0 / 3.0).abs() < 1e-15 && j.start == 0.0 && j.stop.is_none());
+    let em = j.emitter(s.domain.dx, s.physics.density);
+    assert!(em.stop.is_infinite() && (em.spacing - 0.05 / 3.0).abs() < 1e-15);
+    // a jet alone is a liquid scene
+    let only = with_jet(JET).replace(
+        "bodies:\n  - kind: box\n    min: [0, 0, 0]\n    max: [0.3, 0.3, 0.5]\n  - kind: sphere\n    center: [0.7, 0.25, 0.25]\n    radius: 0.1\n",
+        "",
+    );
+    assert!(!only.contains("bodies"));
+    let s = load_str(&only, Path::new("scene.yaml")).unwrap();
+    assert!(s.bodies.is_empty() && s.has_liquid());
+    // line numbers: GOOD has 22 lines, the jet block starts at line 23
+    let e = err(&with_jet(&JET.replace("[0, -1, 0]", "[0, 0, 0]")));
+    check(&e, "jets[0].direction", 25, "non-zero");
+    let e = err(&with_jet(&JET.replace("speed: 0.1", "speed: 0")));
+    check(&e, "jets[0].speed", 27, "got 0 m/s");
+    let e = err(&with_jet(&JET.replace("radius: 0.05", "radius: 0.01")));
+    check(
+        &e,
+        "jets[0].radius",
+        26,
+        "smaller than the particle spacing",
+    );
+    let e = err(&with_jet(
+        &JET.replace("[0.5, 0.4, 0.25]", "[0.5, 0.48, 0.25]"),
+    ));
+    check(&e, "jets[0].origin", 24, "leaves the domain");
+    let e = err(&with_jet(&format!("{JET}    spacing: 1.5\n")));
+    check(&e, "jets[0].spacing", 28, "1.5");
+    let e = err(&with_jet(&format!("{JET}    start: 1\n    stop: 0.5\n")));
+    check(&e, "jets[0].stop", 29, "after start = 1 s");
+    let e = err(&with_jet(&format!("{JET}    rate: 3\n")));
+    assert!(matches!(e, SceneError::Parse { .. }));
+    assert!(e.to_string().contains("unknown field `rate`"), "{e}");
+    assert_eq!(e.location().unwrap().0, 28, "{e}");
+    // free films cannot join a liquid
+    let e = err(&with_jet(
+        "films:\n  - kind: disk\n    center: [0.5, 0.25, 0.25]\n    normal: [0, 1, 0]\n    radius: 0.2\n",
+    ));
+    check(&e, "films", 23, "not supported");
+}
+
+#[test]
+fn pipes_rim_modulation_and_coupling_settings_are_checked() {
+    let pipe = "  - kind: pipe\n    center: [0.5, 0.4, 0.25]\n    axis: [0, 1, 0]\n    inner_radius: 0.05\n    outer_radius: 0.08\n    height: 0.1\n";
+    let s = load_str(&format!("{GOOD}{pipe}"), Path::new("scene.yaml")).unwrap();
+    assert_eq!(s.solids.len(), 2);
+    let e = err(&format!("{GOOD}{}", pipe.replace("0.08", "0.04")));
+    check(
+        &e,
+        "solids[1].outer_radius",
+        27,
+        "must exceed the inner radius 0.05",
+    );
+    let e = err(&format!("{GOOD}{}", pipe.replace("inner_radius", "bore")));
+    assert!(e.to_string().contains("unknown field `bore`"), "{e}");
+    // rim modulation (fluid polygon)
+    let rim = "film:\n  rim_modulation:\n    corners: 6\n    amplitude: 0.5\n    center: [0.5, 0.25, 0.25]\n";
+    let s = load_str(&format!("{GOOD}{rim}"), Path::new("scene.yaml")).unwrap();
+    assert_eq!(s.film.rim_modulation.as_ref().unwrap().corners, 6);
+    let e = err(&format!(
+        "{GOOD}{}",
+        rim.replace("corners: 6", "corners: 1")
+    ));
+    check(&e, "film.rim_modulation.corners", 25, "at least 2");
+    let e = err(&format!(
+        "{GOOD}{}",
+        rim.replace("amplitude: 0.5", "amplitude: 1.2")
+    ));
+    check(&e, "film.rim_modulation.amplitude", 26, "1.2");
+    // coupling: defaults and bad values
+    let s = load_str(GOOD, Path::new("scene.yaml")).unwrap();
+    assert_eq!(s.coupling.tolerance, 1e-9);
+    assert_eq!(s.coupling.max_iterations, 2000);
+    assert_eq!(
+        s.coupling.method,
+        codimfx::scene::CouplingMethod::Monolithic
+    );
+    let s = load_str(
+        &format!("{GOOD}coupling: {{method: schur}}\n"),
+        Path::new("scene.yaml"),
+    )
+    .unwrap();
+    assert_eq!(s.coupling.method, codimfx::scene::CouplingMethod::Schur);
+    let e = err(&format!("{GOOD}coupling:\n  tolerance: 2\n"));
+    check(&e, "coupling.tolerance", 24, "(0, 1)");
+    let e = err(&format!("{GOOD}coupling:\n  max_iterations: 0\n"));
+    check(&e, "coupling.max_iterations", 24, "at least 1");
+    let e = err(&format!("{GOOD}coupling:\n  method: cg\n"));
+    assert!(e.to_string().contains("unknown variant `cg`"), "{e}");
+    assert_eq!(e.path(), "coupling.method", "{e}");
+    assert_eq!(e.location().unwrap().0, 24, "{e}");
+}
+
+#[test]
+fn a_resolution_scale_rescales_dx_and_is_checked_again() {
+    use codimfx::scene::load_str_scaled;
+    let s = load_str_scaled(GOOD, Path::new("scene.yaml"), 2.0).unwrap();
+    assert_eq!(s.domain.dx, 0.1);
+    assert_eq!(s.bodies[0].spacing(), 1.0 / 3.0);
+    // 0.5 m / (0.05 m x 6) < 2 cells: rejected, saying the scale did it
+    let e = load_str_scaled(GOOD, Path::new("scene.yaml"), 6.0).unwrap_err();
+    check(&e, "domain.dx", 5, "fewer than 2 cells");
+    assert!(e.to_string().contains("--scale 6"), "{e}");
+    let e = load_str_scaled(GOOD, Path::new("scene.yaml"), -1.0).unwrap_err();
+    check(&e, "domain.dx", 5, "scale must be positive");
 }
 
 #[test]
@@ -117,6 +271,7 @@ fn the_presets_load() {
     for p in [
         "presets/dam_break.yaml",
         "presets/droplet_on_plane_nosurface.yaml",
+        "presets/dripping.yaml",
     ] {
         load(Path::new(p)).unwrap_or_else(|e| panic!("{e}"));
     }

@@ -85,6 +85,7 @@ fn apic_runs_resume_bit_for_bit() {
             out_root: Some(out.to_path_buf()),
             frames: Some(frames),
             resume,
+            scale: None,
         };
         let mut sim = Sim::open(&scene, &opt).unwrap();
         sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();

@@ -31,6 +31,7 @@ fn mass_is_conserved_and_no_particle_enters_a_solid_with_large_frame_steps() {
         out_root: Some(dir.path().join("out")),
         frames: None,
         resume: false,
+        scale: None,
     };
     let mut sim = Sim::open(&scene, &opt).unwrap();
     let p0 = sim.state.particles.clone();

@@ -30,6 +30,7 @@ fn a_free_droplet_falls_ballistically() {
         out_root: Some(dir.path().join("out")),
         frames: None,
         resume: false,
+        scale: None,
     };
     let mut sim = Sim::open(&scene, &opt).unwrap();
     let com = |p: &codimfx::Particles| -> Vec3 {

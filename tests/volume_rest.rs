@@ -50,6 +50,7 @@ fn check_rest(text: &str, count: usize) {
         out_root: Some(dir.path().join("out")),
         frames: None,
         resume: false,
+        scale: None,
     };
     let mut sim = Sim::open(&scene, &opt).unwrap();
     let n0 = sim.state.particles.len();

@@ -34,6 +34,7 @@ fn run(scene: &Path, out: &Path, frames: u32, resume: bool) {
         out_root: Some(out.to_path_buf()),
         frames: Some(frames),
         resume,
+        scale: None,
     };
     let mut sim = Sim::open(scene, &opt).unwrap();
     sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();
@@ -99,6 +100,7 @@ fn resume_refuses_a_changed_scene() {
         out_root: Some(dir.path().to_path_buf()),
         frames: Some(2),
         resume: true,
+        scale: None,
     };
     let e = Sim::open(&scene, &opt).err().expect("must refuse");
     assert!(e.to_string().contains("scene file changed"), "{e}");

@@ -45,6 +45,10 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
         tol: f.solver_tolerance,
         max_iter: f.solver_max_iterations,
     };
+    prm.rim_modulation = f
+        .rim_modulation
+        .as_ref()
+        .map(|m| (m.corners, m.amplitude, Vec3::from(m.center)));
     prm
 }
 

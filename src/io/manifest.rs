@@ -133,6 +133,9 @@ pub struct FrameRecord {
     /// Rest volume of the film's gas pocket (m³), needed to resume.
     #[serde(default)]
     pub gas_v0: Option<Real>,
+    /// Particles emitted by jets during the frame.
+    #[serde(default)]
+    pub emitted: u64,
 }
 
 /// The whole manifest.
@@ -152,8 +155,11 @@ pub struct Manifest {
     pub scene_yaml: String,
     /// Frames per second.
     pub fps: Real,
-    /// Cell size Δx (m).
+    /// Cell size Δx (m) the run used (the scene's, times `scale`).
     pub dx: Real,
+    /// Resolution scale of the run (`codimfx sim --scale S`: Δx × S; 1 = the scene's).
+    #[serde(default = "one")]
+    pub scale: Real,
     /// Domain box (m).
     pub domain_min: [Real; 3],
     /// Domain box (m).
@@ -164,6 +170,10 @@ pub struct Manifest {
     pub frames_written: u32,
     /// Per-frame records, frame 0 first.
     pub frames: Vec<FrameRecord>,
+}
+
+fn one() -> Real {
+    1.0
 }
 
 /// Manifest I/O errors.

@@ -87,6 +87,20 @@ pub struct WindSettings {
     pub air_density: f64,
 }
 
+/// Saw-tooth modulation of the rim tension for the fluid polygon (§10.2,
+/// Fig. 16): the rim tension is multiplied by 1 + a·(2·frac(k·φ/2π) − 1), φ
+/// the yaw angle of the particle about the vertical (y) axis through `center`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RimModulation {
+    /// Number of teeth k (corners of the polygon), ≥ 2.
+    pub corners: u32,
+    /// Amplitude a, in [0, 1).
+    pub amplitude: f64,
+    /// Point on the vertical axis of the yaw angle (m).
+    pub center: [f64; 3],
+}
+
 /// Settings of the sheet/filament solver.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -124,6 +138,9 @@ pub struct FilmSettings {
     /// BiCGSTAB iteration budget.
     #[serde(default = "default_film_iters")]
     pub solver_max_iterations: usize,
+    /// Saw-tooth modulation of the rim tension (fluid polygon); none by default.
+    #[serde(default)]
+    pub rim_modulation: Option<RimModulation>,
 }
 
 impl Default for FilmSettings {
@@ -140,6 +157,7 @@ impl Default for FilmSettings {
             max_speed: 0.0,
             solver_tolerance: default_film_tol(),
             solver_max_iterations: default_film_iters(),
+            rim_modulation: None,
         }
     }
 }
@@ -310,20 +328,34 @@ pub fn validate(s: &Scene) -> Check {
         }
         pos("film.wind.air_density".into(), w.air_density)?;
     }
-    if !s.films.is_empty() && !s.bodies.is_empty() {
-        return fail(
-            "films",
-            "films together with liquid bodies need the monolithic coupling of paper §7, which this build does not have",
-        );
-    }
-    if !s.films.is_empty() {
-        let st = s.physics.surface_tension;
-        if !(st.is_finite() && st >= 0.0) {
+    if let Some(m) = &f.rim_modulation {
+        if m.corners < 2 {
             return fail(
-                "physics.surface_tension",
-                format!("must be >= 0 N/m, got {st}"),
+                "film.rim_modulation.corners",
+                format!("must be at least 2, got {}", m.corners),
             );
         }
+        if !(m.amplitude.is_finite() && (0.0..1.0).contains(&m.amplitude)) {
+            return fail(
+                "film.rim_modulation.amplitude",
+                format!(
+                    "must be in [0, 1) (the rim tension must stay positive), got {}",
+                    m.amplitude
+                ),
+            );
+        }
+        if !m.center.iter().all(|c| c.is_finite()) {
+            return fail(
+                "film.rim_modulation.center",
+                format!("{:?} is not finite", m.center),
+            );
+        }
+    }
+    if !s.films.is_empty() && s.has_liquid() {
+        return fail(
+            "films",
+            "free films (`films:`) together with liquid bodies or jets are not supported: the volume step does not run the free-film solver (a liquid's sheets come from its surface layer and from jets)",
+        );
     }
     Ok(())
 }

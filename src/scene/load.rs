@@ -82,6 +82,48 @@ pub fn load(file: &Path) -> Result<Scene, SceneError> {
 
 /// Loads and validates scene text; `file` is only used in messages.
 pub fn load_str(text: &str, file: &Path) -> Result<Scene, SceneError> {
+    load_str_scaled(text, file, 1.0)
+}
+
+/// Loads scene text at a resolution scale `scale` ([`Scene::scaled`]: Δx ×
+/// scale; `codimfx sim --scale`) and validates the scaled scene; messages of
+/// values that the scale changed say so.
+pub fn load_str_scaled(text: &str, file: &Path, scale: f64) -> Result<Scene, SceneError> {
+    if !(scale.is_finite() && scale > 0.0) {
+        let (line, column) = locate(text, "domain.dx");
+        return Err(SceneError::Invalid {
+            file: file.to_path_buf(),
+            path: "domain.dx".into(),
+            line,
+            column,
+            reason: format!("the resolution scale must be positive and finite, got {scale}"),
+        });
+    }
+    let scene = parse(text, file)?;
+    let scene = if scale == 1.0 {
+        scene
+    } else {
+        scene.scaled(scale)
+    };
+    validate(&scene).map_err(|(path, reason)| {
+        let (line, column) = locate(text, &path);
+        SceneError::Invalid {
+            file: file.to_path_buf(),
+            path,
+            line,
+            column,
+            reason: if scale == 1.0 {
+                reason
+            } else {
+                format!("{reason} (at --scale {scale}: dx = {} m)", scene.domain.dx)
+            },
+        }
+    })?;
+    Ok(scene)
+}
+
+/// Parses scene text without validating values.
+fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let de = serde_yaml_ng::Deserializer::from_str(text);
     let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = clean_path(&e.path().to_string());
@@ -104,16 +146,6 @@ pub fn load_str(text: &str, file: &Path) -> Result<Scene, SceneError> {
         SceneError::Parse {
             file: file.to_path_buf(),
             path: if path.is_empty() { ".".into() } else { path },
-            line,
-            column,
-            reason,
-        }
-    })?;
-    validate(&scene).map_err(|(path, reason)| {
-        let (line, column) = locate(text, &path);
-        SceneError::Invalid {
-            file: file.to_path_buf(),
-            path,
             line,
             column,
             reason,

@@ -14,12 +14,14 @@
 //! stages exist.
 
 mod films;
+mod jets;
 mod load;
 mod sample;
 mod validate;
 
-pub use films::{sample_films, FilmBody, FilmSettings, WindSettings};
-pub use load::{load, load_str, SceneError};
+pub use films::{sample_films, FilmBody, FilmSettings, RimModulation, WindSettings};
+pub use jets::{CouplingMethod, CouplingSettings, JetSettings};
+pub use load::{load, load_str, load_str_scaled, SceneError};
 pub use sample::{sample_bodies, SampleReport};
 
 use serde::{Deserialize, Serialize};
@@ -53,6 +55,12 @@ pub struct Scene {
     /// Settings of the sheet/filament solver.
     #[serde(default)]
     pub film: FilmSettings,
+    /// Cylindrical jets emitting liquid during the run (Appendix F).
+    #[serde(default)]
+    pub jets: Vec<JetSettings>,
+    /// Settings of the monolithic grid–particle coupling (eq. 24).
+    #[serde(default)]
+    pub coupling: CouplingSettings,
     /// Static solids (the domain box is always a closed container as well).
     #[serde(default)]
     pub solids: Vec<Solid>,
@@ -96,7 +104,7 @@ pub struct Physics {
     /// Liquid density ρ (kg/m³).
     #[serde(default = "default_density")]
     pub density: f64,
-    /// Surface tension σ (N/m). Must be 0 until the MLS tension stage (§6) exists.
+    /// Surface tension σ (N/m), ≥ 0.
     #[serde(default)]
     pub surface_tension: f64,
     /// Dynamic viscosity μ (Pa·s; the paper's Table 2 lists mPa·s: 0.25 mPa·s = 2.5e-4 Pa·s).
@@ -165,6 +173,10 @@ pub enum FluidBody {
         /// Particle spacing relative to Δx.
         #[serde(default = "default_spacing")]
         spacing: f64,
+        /// Outermost layer of particles sampled as sheet particles (Appendix F);
+        /// `None` = yes when σ > 0 ([`FluidBody::surface_layer`]).
+        #[serde(default)]
+        surface_layer: Option<bool>,
     },
     /// Sphere, sampled on equidistant concentric shells (Appendix F).
     Sphere {
@@ -178,6 +190,10 @@ pub enum FluidBody {
         /// Particle spacing relative to Δx.
         #[serde(default = "default_spacing")]
         spacing: f64,
+        /// Outermost layer of particles sampled as sheet particles (Appendix F);
+        /// `None` = yes when σ > 0 ([`FluidBody::surface_layer`]).
+        #[serde(default)]
+        surface_layer: Option<bool>,
     },
     /// Axis-aligned ellipsoid, sampled on a regular lattice.
     Ellipsoid {
@@ -191,6 +207,10 @@ pub enum FluidBody {
         /// Particle spacing relative to Δx.
         #[serde(default = "default_spacing")]
         spacing: f64,
+        /// Outermost layer of particles sampled as sheet particles (Appendix F);
+        /// `None` = yes when σ > 0 ([`FluidBody::surface_layer`]).
+        #[serde(default)]
+        surface_layer: Option<bool>,
     },
     /// Finite cylinder, sampled on a regular lattice.
     Cylinder {
@@ -208,6 +228,10 @@ pub enum FluidBody {
         /// Particle spacing relative to Δx.
         #[serde(default = "default_spacing")]
         spacing: f64,
+        /// Outermost layer of particles sampled as sheet particles (Appendix F);
+        /// `None` = yes when σ > 0 ([`FluidBody::surface_layer`]).
+        #[serde(default)]
+        surface_layer: Option<bool>,
     },
 }
 
@@ -244,6 +268,20 @@ pub enum Solid {
         axis: [f64; 3],
         /// Radius (m).
         radius: f64,
+        /// Length along the axis (m).
+        height: f64,
+    },
+    /// Hollow cylinder open at both ends (a pipe or nozzle): the solid is the
+    /// wall between `inner_radius` and `outer_radius`.
+    Pipe {
+        /// Centre of the axis segment (m).
+        center: [f64; 3],
+        /// Axis direction.
+        axis: [f64; 3],
+        /// Radius of the bore (m).
+        inner_radius: f64,
+        /// Outer radius of the wall (m), > `inner_radius`.
+        outer_radius: f64,
         /// Length along the axis (m).
         height: f64,
     },
@@ -326,6 +364,19 @@ impl FluidBody {
         }
     }
 
+    /// Whether the outermost layer of the body's particles is sampled as
+    /// sheet particles (Appendix F), given the scene's surface tension σ
+    /// (N/m): the body's `surface_layer` when set, else σ > 0.
+    pub fn surface_layer(&self, sigma: f64) -> bool {
+        let s = match self {
+            FluidBody::Box { surface_layer, .. }
+            | FluidBody::Sphere { surface_layer, .. }
+            | FluidBody::Ellipsoid { surface_layer, .. }
+            | FluidBody::Cylinder { surface_layer, .. } => *surface_layer,
+        };
+        s.unwrap_or(sigma > 0.0)
+    }
+
     /// Initial velocity (m/s).
     pub fn velocity(&self) -> [f64; 3] {
         match self {
@@ -338,6 +389,22 @@ impl FluidBody {
 }
 
 impl Scene {
+    /// True when the scene has liquid (bodies or jets) and so runs on the grid;
+    /// false for film-only scenes.
+    pub fn has_liquid(&self) -> bool {
+        !self.bodies.is_empty() || !self.jets.is_empty()
+    }
+
+    /// The same scene at a coarser (S > 1) or finer (S < 1) resolution: Δx is
+    /// multiplied by `s`; every particle spacing is relative to Δx and so
+    /// follows (`codimfx sim --scale S`). Lengths of bodies, jets and solids
+    /// are unchanged. The result must be validated again.
+    pub fn scaled(&self, s: f64) -> Scene {
+        let mut out = self.clone();
+        out.domain.dx *= s;
+        out
+    }
+
     /// Total body acceleration: gravity plus the uniform body force (m/s²).
     pub fn acceleration(&self) -> [f64; 3] {
         let g = self.physics.gravity;

@@ -175,6 +175,27 @@ fn check_solid(i: usize, s: &Solid) -> Check {
             positive(&format!("{p}.radius"), *radius)?;
             positive(&format!("{p}.height"), *height)
         }
+        Solid::Pipe {
+            center,
+            axis,
+            inner_radius,
+            outer_radius,
+            height,
+        } => {
+            finite3(&format!("{p}.center"), center)?;
+            nonzero3(&format!("{p}.axis"), axis)?;
+            positive(&format!("{p}.inner_radius"), *inner_radius)?;
+            positive(&format!("{p}.outer_radius"), *outer_radius)?;
+            if outer_radius <= inner_radius {
+                return fail(
+                    format!("{p}.outer_radius"),
+                    format!(
+                        "outer radius {outer_radius} m must exceed the inner radius {inner_radius} m"
+                    ),
+                );
+            }
+            positive(&format!("{p}.height"), *height)
+        }
     }
 }
 
@@ -229,13 +250,10 @@ pub fn validate(s: &Scene) -> Check {
             format!("must be >= 0 Pa·s, got {}", ph.viscosity),
         );
     }
-    if ph.surface_tension != 0.0 && !s.bodies.is_empty() {
+    if !(ph.surface_tension.is_finite() && ph.surface_tension >= 0.0) {
         return fail(
             "physics.surface_tension",
-            format!(
-                "sigma = {} N/m on a liquid volume needs the monolithic coupling of paper §7, which this build does not have (films alone may have surface tension); use 0",
-                ph.surface_tension
-            ),
+            format!("must be >= 0 N/m and finite, got {}", ph.surface_tension),
         );
     }
     finite3("physics.gravity", &ph.gravity)?;
@@ -267,10 +285,11 @@ pub fn validate(s: &Scene) -> Check {
             ),
         );
     }
-    if s.bodies.is_empty() && s.films.is_empty() {
-        return fail("bodies", "the scene has no liquid body and no film");
+    if s.bodies.is_empty() && s.films.is_empty() && s.jets.is_empty() {
+        return fail("bodies", "the scene has no liquid body, no jet and no film");
     }
     super::films::validate(s)?;
+    super::jets::validate(s)?;
     for (i, b) in s.bodies.iter().enumerate() {
         check_body(i, b, s)?;
     }

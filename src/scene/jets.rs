@@ -1,0 +1,194 @@
+//! Jets and coupling settings in scene files.
+//!
+//! `jets:` lists cylindrical jets (paper Appendix F): each emits disk-shaped
+//! layers of particles, an equidistributed circle pattern whose outline is
+//! sheet particles, at a rate set by its speed ([`crate::emitter::Jet`]).
+//! `coupling:` holds the settings of the monolithic grid–particle solve of
+//! eq. (24) (§7).
+
+use super::Scene;
+use crate::emitter::Jet;
+use crate::math::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// A cylindrical jet (Appendix F).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct JetSettings {
+    /// Centre of the nozzle opening (m).
+    pub origin: [f64; 3],
+    /// Direction of flow (normalised on use).
+    pub direction: [f64; 3],
+    /// Jet radius R (m): radius of the outline circle of sheet particles.
+    pub radius: f64,
+    /// Speed v₀ (m/s), > 0; a layer leaves the nozzle every spacing / v₀ seconds.
+    pub speed: f64,
+    /// Particle spacing relative to Δx (Appendix F: 1/3).
+    #[serde(default = "default_spacing")]
+    pub spacing: f64,
+    /// Time the jet starts emitting (s).
+    #[serde(default)]
+    pub start: f64,
+    /// Time the jet stops emitting (s); `None` = never.
+    #[serde(default)]
+    pub stop: Option<f64>,
+}
+
+/// Linear solver of the monolithic coupling system (eq. 24).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum CouplingMethod {
+    /// The whole system at once: BiCGSTAB + ILU(0), as in the paper.
+    #[default]
+    Monolithic,
+    /// Schur-complement elimination of the impulses λ.
+    Schur,
+}
+
+/// Settings of the monolithic grid–particle coupling (§7, eq. 24).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CouplingSettings {
+    /// Relative residual ‖r‖₂/‖b‖₂ at which the solve stops (paper: 1e-9).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Iteration cap of the solve.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: u32,
+    /// How the system is solved.
+    #[serde(default)]
+    pub method: CouplingMethod,
+}
+
+impl Default for CouplingSettings {
+    fn default() -> Self {
+        CouplingSettings {
+            tolerance: default_tolerance(),
+            max_iterations: default_max_iterations(),
+            method: CouplingMethod::Monolithic,
+        }
+    }
+}
+
+fn default_spacing() -> f64 {
+    1.0 / 3.0
+}
+fn default_tolerance() -> f64 {
+    1e-9
+}
+fn default_max_iterations() -> u32 {
+    2000
+}
+
+impl JetSettings {
+    /// The emitter of this jet in a scene with cell size `dx` (m) and density `rho` (kg/m³).
+    pub fn emitter(&self, dx: f64, rho: f64) -> Jet {
+        Jet {
+            origin: Vec3::from(self.origin),
+            direction: Vec3::from(self.direction).normalize(),
+            radius: self.radius,
+            speed: self.speed,
+            spacing: self.spacing * dx,
+            start: self.start,
+            stop: self.stop.unwrap_or(f64::INFINITY),
+            density: rho,
+        }
+    }
+}
+
+type Check = Result<(), (String, String)>;
+
+fn fail(path: impl Into<String>, reason: impl Into<String>) -> Check {
+    Err((path.into(), reason.into()))
+}
+
+/// Largest number of particles in one emitted layer.
+const MAX_LAYER: f64 = 1e6;
+
+/// Checks the jets and the coupling settings (field path, reason).
+pub fn validate(s: &Scene) -> Check {
+    let d = &s.domain;
+    for (i, j) in s.jets.iter().enumerate() {
+        let p = |f: &str| format!("jets[{i}].{f}");
+        if !j.origin.iter().all(|c| c.is_finite()) {
+            return fail(p("origin"), format!("{:?} is not finite", j.origin));
+        }
+        let r = if j.radius.is_finite() { j.radius } else { 0.0 };
+        if !(0..3).all(|k| j.origin[k] - r >= d.min[k] && j.origin[k] + r <= d.max[k]) {
+            return fail(
+                p("origin"),
+                format!(
+                    "nozzle (centre {:?}, radius {r} m) leaves the domain {:?}–{:?}",
+                    j.origin, d.min, d.max
+                ),
+            );
+        }
+        let n2: f64 = j.direction.iter().map(|c| c * c).sum();
+        if !(j.direction.iter().all(|c| c.is_finite()) && n2 > 1e-24) {
+            return fail(
+                p("direction"),
+                format!("direction {:?} must be finite and non-zero", j.direction),
+            );
+        }
+        if !(j.radius.is_finite() && j.radius > 0.0) {
+            return fail(
+                p("radius"),
+                format!("must be positive and finite, got {}", j.radius),
+            );
+        }
+        if !(j.speed.is_finite() && j.speed > 0.0) {
+            return fail(
+                p("speed"),
+                format!("must be positive and finite, got {} m/s", j.speed),
+            );
+        }
+        if !(j.spacing.is_finite() && j.spacing > 0.0 && j.spacing <= 1.0) {
+            return fail(
+                p("spacing"),
+                format!("must be in (0, 1] (relative to dx), got {}", j.spacing),
+            );
+        }
+        let sp = j.spacing * d.dx;
+        if j.radius < sp {
+            return fail(
+                p("radius"),
+                format!(
+                    "radius {} m is smaller than the particle spacing {sp} m (spacing x dx)",
+                    j.radius
+                ),
+            );
+        }
+        let per_layer = std::f64::consts::PI * (j.radius / sp + 0.5).powi(2);
+        if per_layer > MAX_LAYER {
+            return fail(
+                p("spacing"),
+                format!("spacing {sp} m puts ~{per_layer:.0} particles in one layer (limit 1e6)"),
+            );
+        }
+        if !(j.start.is_finite() && j.start >= 0.0) {
+            return fail(
+                p("start"),
+                format!("must be >= 0 s and finite, got {}", j.start),
+            );
+        }
+        if let Some(stop) = j.stop {
+            if !(stop.is_finite() && stop > j.start) {
+                return fail(
+                    p("stop"),
+                    format!("must be finite and after start = {} s, got {stop}", j.start),
+                );
+            }
+        }
+    }
+    let c = &s.coupling;
+    if !(c.tolerance.is_finite() && c.tolerance > 0.0 && c.tolerance < 1.0) {
+        return fail(
+            "coupling.tolerance",
+            format!("must be in (0, 1), got {}", c.tolerance),
+        );
+    }
+    if c.max_iterations == 0 {
+        return fail("coupling.max_iterations", "must be at least 1");
+    }
+    Ok(())
+}
