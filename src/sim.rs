@@ -9,6 +9,12 @@
 //! (`step` module docs) and the caches hold positions and velocities in double
 //! precision, `resume` continues from the last complete frame bit for bit.
 //! A stop flag (Ctrl-C in the binary) is checked after every frame.
+//!
+//! Jets (Appendix F) emit before each substep [t, t + Δt) the layers whose
+//! emission times fall in it ([`crate::emitter::Jet::emit_placed`]); which
+//! layers exist is a function of time alone, so a resumed run (whose time is
+//! exactly frame / fps) emits the same particles. The frame record counts
+//! them (`emitted`).
 
 use crate::emitter::Jet;
 use crate::film::driver as film_driver;
@@ -416,7 +422,12 @@ impl Sim {
                     self.scene.time.max_dt,
                 );
                 // particles about to leave a nozzle count in the CFL limit too
-                let v_jet = self.jets.iter().map(|j| j.speed).fold(0.0, Real::max);
+                let v_jet = self
+                    .jets
+                    .iter()
+                    .filter(|j| j.stop > self.time)
+                    .map(|j| j.speed)
+                    .fold(0.0, Real::max);
                 if v_jet > 0.0 {
                     dt = dt.min(self.scene.time.cfl * dx / v_jet);
                 }
