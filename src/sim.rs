@@ -467,6 +467,16 @@ impl Sim {
                 rec.fallbacks.solid_pushouts += info.advect.solid_pushouts as u64;
                 rec.fallbacks.wall_clamps += info.advect.wall_clamps as u64;
                 rec.fallbacks.theta_clamps += info.pressure.theta_clamps as u64;
+                if let Some(c) = &info.coupling {
+                    rec.constraint_faces = rec.constraint_faces.max(c.faces);
+                    rec.surface = c.counts;
+                    rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
+                }
+                let (a, b) = (&mut rec.transitions, &info.transitions);
+                a.volume_to_sheet += b.volume_to_sheet;
+                a.sheet_to_volume += b.sheet_to_volume;
+                a.sheet_to_filament += b.sheet_to_filament;
+                a.filament_to_point += b.filament_to_point;
                 rec.liquid_volume = info.liquid_volume;
                 rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
                 rec.blocks = rec.blocks.max(info.blocks);

@@ -28,7 +28,7 @@ use crate::linsolve::BicgstabParams;
 use crate::math::{Real, Vec3};
 use crate::mls::MlsParams;
 use crate::particles::Particles;
-use crate::scene::{Scene, Transfer};
+use crate::scene::{CouplingMethod, Scene, Transfer};
 use crate::solids::SolidSet;
 use crate::transition::{TransitionCounts, TransitionParams};
 use std::collections::BTreeMap;
@@ -143,14 +143,18 @@ impl StepParams {
 }
 
 /// The coupled solve's parameters of a scene: MLS support h = Δx (Appendix
-/// F), the film fit order, the scene's BiCGSTAB rule.
+/// F), the film fit order, transitions and rim modulation of `film:`, the
+/// method and BiCGSTAB rule of `coupling:`.
 pub fn coupling_params(s: &Scene) -> CouplingParams {
     let h = s.domain.dx;
     CouplingParams {
-        method: Method::default(),
+        method: match s.coupling.method {
+            CouplingMethod::Monolithic => Method::Monolithic,
+            CouplingMethod::Schur => Method::Schur,
+        },
         solver: BicgstabParams {
-            tol: 1e-9,
-            max_iter: 2000,
+            tol: s.coupling.tolerance,
+            max_iter: s.coupling.max_iterations as usize,
         },
         surface: SurfaceParams {
             mls: MlsParams {
@@ -160,14 +164,18 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             sigma: s.physics.surface_tension,
             density: s.physics.density,
             bud_angle: std::f64::consts::PI / 6.0,
-            rim_modulation: None,
+            rim_modulation: s
+                .film
+                .rim_modulation
+                .as_ref()
+                .map(|m| (m.corners, m.amplitude, Vec3::from(m.center))),
         },
         pressure: PcgParams {
             tolerance: s.solver.pressure_tolerance,
             max_iterations: s.solver.pressure_max_iterations,
         },
         verify: false,
-        transitions: Some(TransitionParams::paper(h)),
+        transitions: s.film.transitions.then(|| TransitionParams::paper(h)),
     }
 }
 

@@ -69,7 +69,7 @@ pub struct CouplingParams {
 }
 
 /// What a coupled solve did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CouplingInfo {
     /// Liquid cells (pressure unknowns).
     pub cells: usize,
@@ -97,6 +97,12 @@ pub struct CouplingInfo {
     pub solve_s: Real,
     /// Ghost-fluid θ clamps.
     pub theta_clamps: usize,
+    /// Solves that failed with the chosen method and were redone with the
+    /// other one (a counted fallback).
+    pub method_fallbacks: usize,
+    /// Why the chosen method failed, when it did.
+    #[serde(skip)]
+    pub first_failure: Option<String>,
     /// Mean pressure (Pa) of the liquid cells deeper than Δx below the
     /// surface (0 if none): the Young–Laplace jump of a droplet at rest.
     pub interior_pressure: Real,
@@ -192,41 +198,27 @@ pub fn solve(
         return Ok(info);
     }
     let vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
-    let (form, reduced) = match prm.method {
-        Method::Monolithic => (Form::Monolithic, None),
-        Method::Schur => (
-            Form::Reduced,
-            Some(Poisson::build(grid, solids, |a, s| k.index(a, s).is_some())),
-        ),
+    // the chosen method; if its solve fails, the other one (counted)
+    let order = match prm.method {
+        Method::Monolithic => [Form::Monolithic, Form::Reduced],
+        Method::Schur => [Form::Reduced, Form::Monolithic],
     };
-    let sys = assemble(
-        form,
-        reduced.as_ref().unwrap_or(&full),
-        &surf,
-        &k,
-        &vstar,
-        sc,
-    )
-    .map_err(solve_err("coupled system assembly"))?;
-    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
-    info.unknowns = a.nrows;
-    info.nonzeros = a.val.len();
-    info.assemble_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let ilu = Ilu0::new(&a).map_err(solve_err("coupled system ILU(0)"))?;
-    info.factor_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let mut x = vec![0.0; a.nrows];
-    for (i, u) in surf.u.iter().enumerate() {
-        for d in 0..3 {
-            x[sys.uo + 3 * i + d] = u[d];
+    let mut attempt = None;
+    for (n, form) in order.into_iter().enumerate() {
+        let t = if n == 0 { t } else { Instant::now() };
+        match solve_form(form, grid, solids, &full, &surf, &k, &vstar, sc, prm, &mut info, t) {
+            Ok(r) => {
+                attempt = Some(r);
+                break;
+            }
+            Err(e) if n == 0 => {
+                info.method_fallbacks += 1;
+                info.first_failure = Some(e.to_string());
+            }
+            Err(e) => return Err(e),
         }
     }
-    let s = bicgstab(&a, &sys.rhs, &mut x, &ilu, &prm.solver)
-        .map_err(solve_err("coupled system BiCGSTAB"))?;
-    info.iterations = s.iterations;
-    info.rel_residual = s.rel_residual;
-    info.solve_s = t.elapsed().as_secs_f64();
+    let (form, sys, x) = attempt.expect("a solve succeeded or returned");
     let q = &x[sys.qo..sys.qo + sys.nq];
     let u: Vec<Vec3> = (0..sys.np)
         .map(|i| {
@@ -286,6 +278,51 @@ fn interior_pressure(full: &Poisson, q: &[Real], dx: Real, sc: Scalars) -> Real 
     } else {
         sum / n as Real * sc.density * dx / sc.dt
     }
+}
+
+/// Assembles, factors and solves one form; returns the form, the system
+/// and the solution.
+#[allow(clippy::too_many_arguments)]
+fn solve_form(
+    form: Form,
+    grid: &MacGrid,
+    solids: &SolidSet,
+    full: &Poisson,
+    surf: &surface::Surface,
+    k: &faces::Constraints,
+    vstar: &[Real],
+    sc: Scalars,
+    prm: &CouplingParams,
+    info: &mut CouplingInfo,
+    t: Instant,
+) -> Result<(Form, system::Assembled, Vec<Real>), CouplingError> {
+    let reduced = (form == Form::Reduced)
+        .then(|| Poisson::build(grid, solids, |a, s| k.index(a, s).is_some()));
+    let sys = assemble(form, reduced.as_ref().unwrap_or(full), surf, k, vstar, sc)
+        .map_err(solve_err("coupled system assembly"))?;
+    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
+    info.unknowns = a.nrows;
+    info.nonzeros = a.val.len();
+    info.assemble_s += t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let ilu = Ilu0::new(&a).map_err(solve_err("coupled system ILU(0)"))?;
+    info.factor_s += t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let mut x = vec![0.0; a.nrows];
+    for (i, u) in surf.u.iter().enumerate() {
+        for d in 0..3 {
+            x[sys.uo + 3 * i + d] = u[d];
+        }
+    }
+    let s = bicgstab(&a, &sys.rhs, &mut x, &ilu, &prm.solver);
+    info.solve_s += t.elapsed().as_secs_f64();
+    let s = s.map_err(solve_err(match form {
+        Form::Monolithic => "coupled system BiCGSTAB (monolithic)",
+        Form::Reduced => "coupled system BiCGSTAB (Schur)",
+    }))?;
+    info.iterations += s.iterations;
+    info.rel_residual = s.rel_residual;
+    Ok((form, sys, x))
 }
 
 /// ‖b − A x‖/‖b‖ of eq. (24) in the monolithic form for a solution given as

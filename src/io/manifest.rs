@@ -79,6 +79,10 @@ pub struct Fallbacks {
     /// Film substeps retried at half length after a failed solve.
     #[serde(default)]
     pub step_halvings: u64,
+    /// Coupled solves (eq. 24) redone with the other method after the
+    /// chosen one failed to converge.
+    #[serde(default)]
+    pub coupling_method_switches: u64,
 }
 
 /// One frame's record.
@@ -136,6 +140,13 @@ pub struct FrameRecord {
     /// Particles emitted by jets during the frame.
     #[serde(default)]
     pub emitted: u64,
+    /// Largest number of constraint faces (λ unknowns of eq. 24) in a substep.
+    #[serde(default)]
+    pub constraint_faces: usize,
+    /// Sheet and filament particles of the coupled solve in the frame's
+    /// last substep, by role.
+    #[serde(default)]
+    pub surface: crate::coupling::SurfaceCounts,
 }
 
 /// The whole manifest.
