@@ -176,6 +176,20 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
         },
         verify: false,
         transitions: s.film.transitions.then(|| TransitionParams::paper(h)),
+        sources: s
+            .jets
+            .iter()
+            .map(|j| {
+                let d = Vec3::from(j.direction).normalize();
+                coupling::codim::Source {
+                    origin: Vec3::from(j.origin),
+                    direction: d,
+                    radius: j.radius,
+                    // the layers emitted within one substep at the CFL limit, plus h
+                    depth: 2.0 * h,
+                }
+            })
+            .collect(),
     }
 }
 
@@ -354,9 +368,13 @@ pub fn step(
     info.blocks = grid.blocks.len();
     info.liquid_volume = grid.liquid_volume();
     // 2: codimension update (§8) of the next cycle
-    if let Some(tp) = p.coupling.as_ref().and_then(|c| c.transitions.as_ref()) {
+    if let Some((tp, src)) = p
+        .coupling
+        .as_ref()
+        .and_then(|c| c.transitions.as_ref().map(|t| (t, &c.sources)))
+    {
         info.transitions = timed(times, "transition", || {
-            coupling::codim::update(particles, tp)
+            coupling::codim::update(particles, tp, src)
         });
     } else {
         times.add("transition", 0.0);

@@ -21,15 +21,45 @@
 //! Masses do not change (a particle keeps its mass through a transition),
 //! so mass is conserved exactly.
 
-use crate::math::Mat3;
+use crate::math::{Mat3, Real, Vec3};
 use crate::mls::frame::pca_frame;
 use crate::neighbors::neighbor_lists;
 use crate::particles::{Codim, Particles};
 use crate::transition::{new_codim, TransitionCounts, TransitionParams};
 use rayon::prelude::*;
 
-/// Applies the transition rules to every non-fixed particle of `parts`.
-pub fn update(parts: &mut Particles, prm: &TransitionParams) -> TransitionCounts {
+/// A liquid source (a jet's nozzle): the liquid at its emission plane is
+/// connected to the reservoir behind it, so particles within `depth` of
+/// the plane and inside the jet's radius (plus h) keep their codimension —
+/// the newest layer is never "exposed" at its back.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Source {
+    /// A point of the emission plane on the jet axis (m).
+    pub origin: Vec3,
+    /// Unit jet direction.
+    pub direction: Vec3,
+    /// Jet radius (m).
+    pub radius: Real,
+    /// Depth of the protected region downstream of the plane (m).
+    pub depth: Real,
+}
+
+impl Source {
+    /// True when `x` lies in the protected region.
+    pub fn protects(&self, x: &Vec3, h: Real) -> bool {
+        let d = x - self.origin;
+        let a = d.dot(&self.direction);
+        a > -h && a < self.depth && (d - self.direction * a).norm() < self.radius + h
+    }
+}
+
+/// Applies the transition rules to every non-fixed particle of `parts`
+/// outside the source regions.
+pub fn update(
+    parts: &mut Particles,
+    prm: &TransitionParams,
+    sources: &[Source],
+) -> TransitionCounts {
     let h = prm.h;
     let x = &parts.x;
     let codim = &parts.codim;
@@ -43,7 +73,10 @@ pub fn update(parts: &mut Particles, prm: &TransitionParams) -> TransitionCounts
     let next: Vec<Codim> = (0..x.len())
         .into_par_iter()
         .map(|p| {
-            if parts.fixed[p] || codim[p] == Codim::Point {
+            if parts.fixed[p]
+                || codim[p] == Codim::Point
+                || sources.iter().any(|s| s.protects(&x[p], h))
+            {
                 return codim[p];
             }
             let nb = lists.of(p);
@@ -86,7 +119,6 @@ pub fn update(parts: &mut Particles, prm: &TransitionParams) -> TransitionCounts
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{Real, Vec3};
 
     /// A lattice box of volume particles with spacing s.
     fn block(n: usize, s: Real) -> Particles {
@@ -109,7 +141,7 @@ mod tests {
         let mut p = block(n, s);
         let prm = TransitionParams::paper(4.0 * s);
         let mass0 = p.total_mass();
-        let c = update(&mut p, &prm);
+        let c = update(&mut p, &prm, &[]);
         // the outer layer of the cube is exposed on faces; corners/edges too
         let on_boundary = |x: &Vec3| {
             x.iter()
@@ -143,7 +175,7 @@ mod tests {
             0.1,
             Codim::Sheet,
         );
-        let c = update(&mut p, &prm);
+        let c = update(&mut p, &prm, &[]);
         assert_eq!(p.codim[q], Codim::Volume);
         assert!(c.sheet_to_volume >= 1);
     }

@@ -14,14 +14,21 @@
 //! the sheet becomes a constraint face, so no pressure leaks through a
 //! free-surface face the sheet layer missed (the paper samples particles
 //! more densely for the same reason, Appendix F). Only faces that are open
-//! (cut-cell weight > 0), not on the domain walls, and next to at least one
-//! liquid cell enter K: the face mass of eq. (19) belongs to the liquid.
+//! (cut-cell weight ≥ [`MIN_OPEN`]), not on the domain walls, and next to at
+//! least one liquid cell enter K: the face mass of eq. (19) belongs to the
+//! liquid.
 
 use crate::grid::extrapolate::is_wall_face;
 use crate::grid::projection::{FaceSides, Poisson};
 use crate::grid::{MacGrid, NONE};
 use crate::math::{Real, Vec3};
 use rayon::prelude::*;
+
+/// Smallest open fraction of a constraint face. A face nearly closed by a
+/// cut-cell solid (a jet's sheet layer next to its nozzle's wall) would
+/// make a row of size w_f ≪ 1 in eq. (24) and stall ILU(0)-BiCGSTAB; such a
+/// face is left to the pressure and the solid's free-slip condition.
+pub const MIN_OPEN: Real = 0.1;
 
 /// The constraint faces (rows of K) and J, in (axis, slot) order.
 #[derive(Clone, Debug, Default)]
@@ -104,7 +111,7 @@ pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
         while e < entries.len() && entries[e].0 as usize == a && entries[e].1 as usize == s {
             e += 1;
         }
-        let sides = (!is_wall_face(g, s, a) && g.weight[a][s] > 0.0)
+        let sides = (!is_wall_face(g, s, a) && g.weight[a][s] >= MIN_OPEN)
             .then(|| sys.face(g, a, s))
             .flatten();
         if let Some(sides) = sides {

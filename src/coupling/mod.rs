@@ -63,6 +63,8 @@ pub struct CouplingParams {
     /// Codimension transitions after each advection (§8); `None` keeps
     /// every particle's codimension.
     pub transitions: Option<crate::transition::TransitionParams>,
+    /// Jet nozzles, where transitions are suspended ([`codim::Source`]).
+    pub sources: Vec<codim::Source>,
     /// Also evaluate the residual of the full eq. (24) for the solution
     /// (assembles the monolithic matrix when the Schur method ran).
     pub verify: bool,
@@ -125,6 +127,14 @@ pub enum CouplingError {
         stage: &'static str,
         /// Why.
         source: SolveError,
+    },
+    /// The chosen method failed and so did the other one.
+    #[error("{first}; the other method failed too: {second}")]
+    BothFailed {
+        /// Why the chosen method failed.
+        first: String,
+        /// Why the other one failed.
+        second: Box<CouplingError>,
     },
     /// The uncoupled pressure solve failed.
     #[error("pressure projection: {0}")]
@@ -206,7 +216,9 @@ pub fn solve(
     let mut attempt = None;
     for (n, form) in order.into_iter().enumerate() {
         let t = if n == 0 { t } else { Instant::now() };
-        match solve_form(form, grid, solids, &full, &surf, &k, &vstar, sc, prm, &mut info, t) {
+        match solve_form(
+            form, grid, solids, &full, &surf, &k, &vstar, sc, prm, &mut info, t,
+        ) {
             Ok(r) => {
                 attempt = Some(r);
                 break;
@@ -215,7 +227,12 @@ pub fn solve(
                 info.method_fallbacks += 1;
                 info.first_failure = Some(e.to_string());
             }
-            Err(e) => return Err(e),
+            Err(e) => {
+                return Err(CouplingError::BothFailed {
+                    first: info.first_failure.take().unwrap_or_default(),
+                    second: Box::new(e),
+                })
+            }
         }
     }
     let (form, sys, x) = attempt.expect("a solve succeeded or returned");
