@@ -32,14 +32,20 @@ pub struct DensityField {
     pub blocks: Vec<DensityBlock>,
     /// origin → index
     pub index: FxMap<Key, usize>,
+    /// origins of blocks (sorted) that only deep particles reach: entirely inside, never
+    /// evaluated
+    pub interior: Vec<Key>,
 }
 
 impl DensityField {
-    /// Volume fraction at voxel `ijk` (0 outside every block).
+    /// Volume fraction at voxel `ijk` (1, the bulk value, in interior blocks; 0 outside every
+    /// block).
     #[inline]
     pub fn f(&self, ijk: Key) -> f32 {
-        match self.index.get(&leaf_origin(ijk)) {
+        let o = leaf_origin(ijk);
+        match self.index.get(&o) {
             Some(&b) => self.blocks[b].f[voxel_index(ijk)],
+            None if self.interior.binary_search(&o).is_ok() => 1.0,
             None => 0.0,
         }
     }
@@ -57,29 +63,74 @@ impl DensityField {
     }
 }
 
-/// Sums the kernels (with particle velocities `vel`, indexed by particle) on the grid of voxel
-/// size `h`.
-pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
+/// Blocks (origins) overlapped by the box `c ± e` (voxel size `1/inv`).
+fn blocks_of(c: Vec3, e: Vec3, inv: Real) -> impl Iterator<Item = Key> {
+    let lo = leaf_origin(((c - e) * inv).map(|x| x.ceil() as i32).into());
+    let hi = leaf_origin(((c + e) * inv).map(|x| x.floor() as i32).into());
+    let step = LEAF_DIM as usize;
+    (lo[0]..=hi[0]).step_by(step).flat_map(move |x| {
+        (lo[1]..=hi[1])
+            .step_by(step)
+            .flat_map(move |y| (lo[2]..=hi[2]).step_by(step).map(move |z| [x, y, z]))
+    })
+}
+
+/// Sorted, deduplicated union of per-thread key sets.
+fn key_set(it: impl ParallelIterator<Item = Key>) -> Vec<Key> {
+    let sets = it
+        .fold(FxMap::<Key, ()>::default, |mut m, k| {
+            m.insert(k, ());
+            m
+        })
+        .reduce(FxMap::default, |mut a, b| {
+            if a.len() < b.len() {
+                return b.into_iter().fold(a, |mut m, (k, _)| {
+                    m.insert(k, ());
+                    m
+                });
+            }
+            a.extend(b);
+            a
+        });
+    let mut v: Vec<Key> = sets.into_keys().collect();
+    v.par_sort_unstable();
+    v
+}
+
+/// Sums the kernels (with particle velocities `vel`, indexed by `k.index`) on the grid of voxel
+/// size `h`, in the *band blocks* only: blocks within `reach` (m) of a particle that is not deep
+/// (or within its kernel box and two voxels). Blocks that only deep kernels touch are recorded as
+/// interior (their voxels are ≥ ~0.6 r − kernel radius inside the liquid: f ≥ 1 − lattice noise).
+pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityField {
     let inv = 1.0 / h;
-    // (block, particle) pairs
-    let mut pairs: Vec<(Key, u32)> = (0..k.center.len())
+    let nk = k.center.len();
+    let band = key_set(
+        (0..nk)
+            .into_par_iter()
+            .filter(|&i| !k.deep[i])
+            .flat_map_iter(|i| {
+                let e = k.extent_of(i).add_scalar(2.0 * h).sup(&Vec3::repeat(reach));
+                blocks_of(k.center_of(i), e, inv)
+            }),
+    );
+    let band_index: FxMap<Key, ()> = band.iter().map(|&b| (b, ())).collect();
+    let interior = key_set(
+        (0..nk)
+            .into_par_iter()
+            .filter(|&i| k.deep[i])
+            .flat_map_iter(|i| blocks_of(k.center_of(i), k.extent_of(i), inv))
+            .filter(|b| !band_index.contains_key(b)),
+    );
+    // (block, kernel) pairs in band blocks
+    let mut pairs: Vec<(Key, u32)> = (0..nk)
         .into_par_iter()
         .flat_map_iter(|i| {
-            let c = k.center[i];
-            let e = k.extent[i];
-            let lo = leaf_origin(((c - e) * inv).map(|x| x.ceil() as i32).into());
-            let hi = leaf_origin(((c + e) * inv).map(|x| x.floor() as i32).into());
-            // lazily, without a vector per particle
-            let step = LEAF_DIM as usize;
-            (lo[0]..=hi[0]).step_by(step).flat_map(move |x| {
-                (lo[1]..=hi[1]).step_by(step).flat_map(move |y| {
-                    (lo[2]..=hi[2])
-                        .step_by(step)
-                        .map(move |z| ([x, y, z], i as u32))
-                })
-            })
+            blocks_of(k.center_of(i), k.extent_of(i), inv)
+                .filter(|b| band_index.contains_key(b))
+                .map(move |b| (b, i as u32))
         })
         .collect();
+    drop(band_index);
     pairs.par_sort_unstable();
     let mut groups: Vec<(usize, usize)> = Vec::new();
     let mut s = 0;
@@ -99,10 +150,10 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
             let mut m = [[0f64; 3]; LEAF_SIZE];
             for &(_, pi) in &pairs[s..e] {
                 let i = pi as usize;
-                let c = k.center[i];
-                let ex = k.extent[i];
-                let g = k.g[i];
-                let amp = k.amp[i];
+                let c = k.center_of(i);
+                let ex = k.extent_of(i);
+                let g = k.g_of(i);
+                let amp = k.amp[i] as Real;
                 let v = vel[k.index[i] as usize];
                 let lo = ((c - ex) * inv).map(|x| x.ceil() as i32);
                 let hi = ((c + ex) * inv).map(|x| x.floor() as i32);
@@ -164,6 +215,7 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
         voxel: h,
         blocks,
         index,
+        interior,
     }
 }
 
@@ -173,7 +225,10 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
 pub struct SignField {
     /// block origins and their inside masks (bit n of word n/64)
     pub blocks: Vec<(Key, [u64; 8])>,
+    /// origins of interior blocks (all inside), sorted
+    pub interior: Vec<Key>,
     index: FxMap<Key, usize>,
+    interior_index: FxMap<Key, ()>,
 }
 
 impl SignField {
@@ -193,17 +248,25 @@ impl SignField {
             })
             .collect();
         let index = blocks.iter().enumerate().map(|(i, b)| (b.0, i)).collect();
-        SignField { blocks, index }
+        let interior = d.interior.clone();
+        let interior_index = interior.iter().map(|&k| (k, ())).collect();
+        SignField {
+            blocks,
+            interior,
+            index,
+            interior_index,
+        }
     }
-    /// Is voxel `ijk` inside (outside every block: no)?
+    /// Is voxel `ijk` inside (interior blocks: yes; outside every block: no)?
     #[inline]
     pub fn inside(&self, ijk: Key) -> bool {
-        match self.index.get(&leaf_origin(ijk)) {
+        let o = leaf_origin(ijk);
+        match self.index.get(&o) {
             Some(&b) => {
                 let n = voxel_index(ijk);
                 self.blocks[b].1[n >> 6] >> (n & 63) & 1 == 1
             }
-            None => false,
+            None => self.interior_index.contains_key(&o),
         }
     }
 }

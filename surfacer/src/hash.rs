@@ -67,6 +67,28 @@ impl CellGrid {
         &self.order
     }
 
+    /// Positions in cell order.
+    pub fn sorted(&self) -> &[Vec3] {
+        &self.sorted
+    }
+
+    /// Range in [`Self::order`] of the points of cell `key` (if occupied).
+    #[inline]
+    pub fn cell_range(&self, key: Key) -> Option<(u32, u32)> {
+        self.cells.get(&key).copied()
+    }
+
+    /// Cell of a point.
+    #[inline]
+    pub fn cell_key(&self, p: &Vec3) -> Key {
+        cell_of(p, self.inv_h)
+    }
+
+    /// Cell size.
+    pub fn cell_size(&self) -> Real {
+        1.0 / self.inv_h
+    }
+
     /// Bins `points` into cells of size `h`.
     pub fn build(points: &[Vec3], h: Real) -> CellGrid {
         let inv_h = 1.0 / h;

@@ -5,7 +5,7 @@ use crate::anisotropy::{build_kernels, AnisoParams};
 use crate::cache::{frame_path, list_frames, read_frame, ParticleFrame};
 use crate::filaments::{chain_filaments, tube_prims, tubes_mesh, FilamentParams};
 use crate::levelset::{LevelSet, WorkGrid};
-use crate::mesh::{marching_tets, TriMesh};
+use crate::mesh::{marching_cubes, TriMesh};
 use crate::redistance::{redistance, RedistanceInfo};
 use crate::sheets::{disks_mesh, sheet_disks, SheetParams};
 use crate::{Real, SurfaceError, Vec3};
@@ -117,8 +117,12 @@ pub struct FrameStats {
     pub voxel: Real,
     /// volume particles that kept isotropic kernels
     pub isotropic_kernels: usize,
-    /// density blocks
+    /// volume particles with a full, symmetric neighbourhood (isotropic fast path)
+    pub deep_kernels: usize,
+    /// density blocks evaluated (the band blocks)
     pub density_blocks: usize,
+    /// blocks only deep kernels reach (interior, not evaluated)
+    pub interior_blocks: usize,
     /// redistancing counts
     pub redistance: RedistanceInfo,
     /// shift applied by volume conservation (m, positive = surface moved outward)
@@ -186,23 +190,29 @@ pub fn surface_particles(
     let t = Instant::now();
     let vi = frame.indices_of(0);
     let vpos: Vec<Vec3> = vi.iter().map(|&i| frame.pos[i]).collect();
-    let vvel: Vec<Vec3> = vi.iter().map(|&i| frame.vel[i]).collect();
     let vvol: Vec<Real> = vi
         .iter()
         .map(|&i| 4.0 / 3.0 * std::f64::consts::PI * frame.pscale[i].powi(3))
         .collect();
-    let kernels = build_kernels(&vpos, &vvol, dx, &o.aniso);
+    let mut kernels = build_kernels(&vpos, &vvol, dx, &o.aniso);
+    // kernel → frame index (velocities are read from the frame)
+    kernels
+        .index
+        .par_iter_mut()
+        .for_each(|i| *i = vi[*i as usize] as u32);
     drop(vpos);
     let target: Real = vvol.iter().sum();
     drop(vvol);
     st.isotropic_kernels = kernels.isotropic;
+    st.deep_kernels = kernels.deep.iter().filter(|&&d| d).count();
     st.seconds[0] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let dens = crate::density::rasterize(&kernels, &vvel, h);
-    drop(vvel);
+    let reach = o.aniso.radius_rel * dx + 2.0 * h;
+    let dens = crate::density::rasterize(&kernels, &frame.vel, h, reach);
     drop(kernels);
     st.density_blocks = dens.blocks.len();
+    st.interior_blocks = dens.interior.len();
     let dens_bytes = dens.memory_bytes();
     st.seconds[1] = t.elapsed().as_secs_f64();
 
@@ -232,7 +242,7 @@ pub fn surface_particles(
     st.seconds[3] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let mesh = marching_tets(&ls);
+    let mesh = marching_cubes(&ls);
     st.triangles = mesh.tris.len();
     let sheets = disks_mesh(&disks, o.sheets.segments);
     let filaments = tubes_mesh(frame, &chains, &tubes, h, &o.filaments);

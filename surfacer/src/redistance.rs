@@ -288,6 +288,13 @@ pub fn redistance(
                 && b.1.iter().map(|w| w.count_ones() as usize).sum::<usize>() * 2 > LEAF_SIZE
         })
         .map(|b| b.0)
+        .chain(
+            signs
+                .interior
+                .par_iter()
+                .filter(|b| !grid.index.contains_key(*b))
+                .copied(),
+        )
         .collect();
     (grid, extra_inside, signs, info)
 }
@@ -322,7 +329,13 @@ pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, ban
         .par_iter()
         .filter(|b| !grid.index.contains_key(&b.0))
         .map(|b| b.1.iter().map(|w| w.count_ones() as Real).sum::<Real>())
-        .sum::<Real>();
+        .sum::<Real>()
+        + signs
+            .interior
+            .par_iter()
+            .filter(|b| !grid.index.contains_key(*b))
+            .count() as Real
+            * LEAF_SIZE as Real;
     // V(s), A(s) of the shifted field φ + s
     let eval = |s: Real| {
         let (v, a) = grid
