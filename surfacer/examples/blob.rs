@@ -73,6 +73,16 @@ fn main() {
         debug_deep(&f);
         return;
     }
+    if let Ok(path) = std::env::var("WRITE_XYZ") {
+        let mut b = Vec::new();
+        for p in &f.pos {
+            for c in [p.x, p.y, p.z] {
+                b.extend_from_slice(&(c as f32).to_le_bytes());
+            }
+        }
+        std::fs::write(path, b).unwrap();
+        return;
+    }
     let base = CUR.load(Ordering::Relaxed);
     PEAK.store(base, Ordering::Relaxed);
     let o = SurfaceOptions {

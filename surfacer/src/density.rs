@@ -104,6 +104,7 @@ fn key_set(it: impl ParallelIterator<Item = Key>) -> Vec<Key> {
 pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityField {
     let inv = 1.0 / h;
     let nk = k.center.len();
+    let t0 = std::time::Instant::now();
     let band = key_set(
         (0..nk)
             .into_par_iter()
@@ -131,7 +132,9 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
         })
         .collect();
     drop(band_index);
+    let t1 = t0.elapsed().as_secs_f64();
     pairs.par_sort_unstable();
+    let t2 = t0.elapsed().as_secs_f64();
     let mut groups: Vec<(usize, usize)> = Vec::new();
     let mut s = 0;
     while s < pairs.len() {
@@ -148,41 +151,75 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
             let origin = pairs[s].0;
             let mut f = [0f64; LEAF_SIZE];
             let mut m = [[0f64; 3]; LEAF_SIZE];
+            let ob = Vec3::new(origin[0] as Real, origin[1] as Real, origin[2] as Real);
             for &(_, pi) in &pairs[s..e] {
                 let i = pi as usize;
-                let c = k.center_of(i);
-                let ex = k.extent_of(i);
-                let g = k.g_of(i);
+                let ex = k.extent_of(i) * inv;
+                // centre in voxel units relative to the block; G in voxel units (q = Gv (x − c))
+                let c = k.center_of(i) * inv - ob;
+                let gs = k.g[i];
                 let amp = k.amp[i] as Real;
                 let v = vel[k.index[i] as usize];
-                let lo = ((c - ex) * inv).map(|x| x.ceil() as i32);
-                let hi = ((c + ex) * inv).map(|x| x.floor() as i32);
-                for x in lo.x.max(origin[0])..=hi.x.min(origin[0] + 7) {
-                    for y in lo.y.max(origin[1])..=hi.y.min(origin[1] + 7) {
-                        let base = Vec3::new(x as Real * h - c.x, y as Real * h - c.y, -c.z);
-                        let gb = g * base;
-                        let gz = g.column(2) * h;
-                        // |gb + z gz|² < 1 is a quadratic in z: visit only its interval
-                        let (qa, qb, qc) = (gz.norm_squared(), gb.dot(&gz), gb.norm_squared());
+                let lo = (c - ex).map(|x| (x.ceil() as i32).max(0));
+                let hi = (c + ex).map(|x| (x.floor() as i32).min(LEAF_DIM - 1));
+                let mut add = |x: i32, y: i32, z: i32, s2: Real| {
+                    if s2 < 1.0 {
+                        let t = 1.0 - s2;
+                        let w = amp * t * t * t;
+                        let n = ((x << 6) | (y << 3) | z) as usize;
+                        f[n] += w;
+                        m[n][0] += w * v.x;
+                        m[n][1] += w * v.y;
+                        m[n][2] += w * v.z;
+                    }
+                };
+                if gs[1] == 0.0 && gs[2] == 0.0 && gs[4] == 0.0 && gs[0] == gs[3] && gs[0] == gs[5]
+                {
+                    // isotropic: |q|² = s² |x − c|², z-interval from the radius
+                    let sc = gs[0] as Real * h;
+                    let (s2, r2) = (sc * sc, 1.0 / (sc * sc));
+                    for x in lo.x..=hi.x {
+                        let dx = x as Real - c.x;
+                        for y in lo.y..=hi.y {
+                            let dy = y as Real - c.y;
+                            let rxy = dx * dx + dy * dy;
+                            if rxy >= r2 {
+                                continue;
+                            }
+                            let zr = (r2 - rxy).sqrt();
+                            let z0 = ((c.z - zr).ceil() as i32).max(lo.z);
+                            let z1 = ((c.z + zr).floor() as i32).min(hi.z);
+                            for z in z0..=z1 {
+                                let dz = z as Real - c.z;
+                                add(x, y, z, s2 * (rxy + dz * dz));
+                            }
+                        }
+                    }
+                    continue;
+                }
+                let g = k.g_of(i) * h;
+                let (gx, gy, gz) = (g.column(0).into_owned(), g.column(1).into_owned(), g.column(2).into_owned());
+                // |u + z gz|² < 1 is a quadratic in z: visit only its interval
+                let qa = gz.norm_squared();
+                if qa <= 0.0 {
+                    continue;
+                }
+                let u0 = -(g * c);
+                for x in lo.x..=hi.x {
+                    let ux = u0 + gx * x as Real;
+                    for y in lo.y..=hi.y {
+                        let u = ux + gy * y as Real;
+                        let (qb, qc) = (u.dot(&gz), u.norm_squared());
                         let disc = qb * qb - qa * (qc - 1.0);
-                        if disc <= 0.0 || qa <= 0.0 {
+                        if disc <= 0.0 {
                             continue;
                         }
                         let sd = disc.sqrt();
-                        let z0 = ((-qb - sd) / qa).ceil() as i32;
-                        let z1 = ((-qb + sd) / qa).floor() as i32;
-                        for z in z0.max(lo.z).max(origin[2])..=z1.min(hi.z).min(origin[2] + 7) {
-                            let q = gb + gz * z as Real;
-                            let s2 = q.norm_squared();
-                            if s2 < 1.0 {
-                                let t = 1.0 - s2;
-                                let w = amp * t * t * t;
-                                let n = voxel_index([x, y, z]);
-                                f[n] += w;
-                                m[n][0] += w * v.x;
-                                m[n][1] += w * v.y;
-                                m[n][2] += w * v.z;
-                            }
+                        let z0 = (((-qb - sd) / qa).ceil() as i32).max(lo.z);
+                        let z1 = (((-qb + sd) / qa).floor() as i32).min(hi.z);
+                        for z in z0..=z1 {
+                            let q = u + gz * z as Real;
+                            add(x, y, z, q.norm_squared());
                         }
                     }
                 }
@@ -206,6 +243,9 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
             }
         })
         .collect();
+    if std::env::var("SURFACER_DEBUG").is_ok() {
+        eprintln!("density: sets+pairs {t1:.2} sort {:.2} blocks {:.2} s, {} pairs", t2 - t1, t0.elapsed().as_secs_f64() - t2, pairs.len());
+    }
     let index = blocks
         .iter()
         .enumerate()

@@ -219,6 +219,9 @@ pub fn surface_particles(
     let t = Instant::now();
     let (mut grid, extra_inside, signs, info): (WorkGrid, _, _, _) = redistance(dens, iso, band);
     st.redistance = info;
+    if std::env::var("SURFACER_DEBUG").is_ok() {
+        eprintln!("redistance {:.2} s", t.elapsed().as_secs_f64());
+    }
     if o.conserve_volume && !vi.is_empty() {
         st.volume_shift = crate::redistance::conserve_volume(&mut grid, &signs, target, band);
     }

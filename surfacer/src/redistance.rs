@@ -112,6 +112,7 @@ pub fn redistance(
         })
         .collect();
     info.seeds = seeds.len();
+    let t0 = std::time::Instant::now();
     let signs = SignField::new(&d, iso);
     drop(d);
     let inside = |ijk: Key| signs.inside(ijk);
@@ -280,6 +281,9 @@ pub fn redistance(
         }
     }
 
+    if std::env::var("SURFACER_DEBUG").is_ok() {
+        eprintln!("propagation {:.2} s", t0.elapsed().as_secs_f64());
+    }
     let extra_inside: Vec<Key> = signs
         .blocks
         .par_iter()
