@@ -198,7 +198,11 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
                     continue;
                 }
                 let g = k.g_of(i) * h;
-                let (gx, gy, gz) = (g.column(0).into_owned(), g.column(1).into_owned(), g.column(2).into_owned());
+                let (gx, gy, gz) = (
+                    g.column(0).into_owned(),
+                    g.column(1).into_owned(),
+                    g.column(2).into_owned(),
+                );
                 // |u + z gz|² < 1 is a quadratic in z: visit only its interval
                 let qa = gz.norm_squared();
                 if qa <= 0.0 {
@@ -244,7 +248,12 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
         })
         .collect();
     if std::env::var("SURFACER_DEBUG").is_ok() {
-        eprintln!("density: sets+pairs {t1:.2} sort {:.2} blocks {:.2} s, {} pairs", t2 - t1, t0.elapsed().as_secs_f64() - t2, pairs.len());
+        eprintln!(
+            "density: sets+pairs {t1:.2} sort {:.2} blocks {:.2} s, {} pairs",
+            t2 - t1,
+            t0.elapsed().as_secs_f64() - t2,
+            pairs.len()
+        );
     }
     let index = blocks
         .iter()

@@ -32,6 +32,9 @@ pub struct SurfaceOptions {
     pub filaments: FilamentParams,
     /// frames surfaced at the same time (≥ 1); each uses all threads inside as well
     pub parallel_frames: usize,
+    /// passes of the [1 2 1]/4 band filter on the volume level set (see
+    /// [`crate::redistance::smooth_band`]; 0 = none)
+    pub smooth_iterations: usize,
     /// shift the volume level set so it encloses the particles' volume (see
     /// [`crate::redistance::conserve_volume`])
     pub conserve_volume: bool,
@@ -48,6 +51,7 @@ impl Default for SurfaceOptions {
             sheets: SheetParams::default(),
             filaments: FilamentParams::default(),
             parallel_frames: 2,
+            smooth_iterations: 1,
             conserve_volume: true,
         }
     }
@@ -221,6 +225,9 @@ pub fn surface_particles(
     st.redistance = info;
     if std::env::var("SURFACER_DEBUG").is_ok() {
         eprintln!("redistance {:.2} s", t.elapsed().as_secs_f64());
+    }
+    if o.smooth_iterations > 0 && !vi.is_empty() {
+        crate::redistance::smooth_band(&mut grid, &|k| signs.inside(k), o.smooth_iterations);
     }
     if o.conserve_volume && !vi.is_empty() {
         st.volume_shift = crate::redistance::conserve_volume(&mut grid, &signs, target, band);
