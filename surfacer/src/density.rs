@@ -63,38 +63,133 @@ impl DensityField {
     }
 }
 
-/// Blocks (origins) overlapped by the box `c ± e` (voxel size `1/inv`).
-fn blocks_of(c: Vec3, e: Vec3, inv: Real) -> impl Iterator<Item = Key> {
-    let lo = leaf_origin(((c - e) * inv).map(|x| x.ceil() as i32).into());
-    let hi = leaf_origin(((c + e) * inv).map(|x| x.floor() as i32).into());
-    let step = LEAF_DIM as usize;
-    (lo[0]..=hi[0]).step_by(step).flat_map(move |x| {
-        (lo[1]..=hi[1])
-            .step_by(step)
-            .flat_map(move |y| (lo[2]..=hi[2]).step_by(step).map(move |z| [x, y, z]))
-    })
+/// Block-index box (origins / 8, inclusive) overlapped by the box `c ± e` (voxel size `1/inv`).
+fn block_box(c: Vec3, e: Vec3, inv: Real) -> ([i32; 3], [i32; 3]) {
+    let lo: [i32; 3] = ((c - e) * inv).map(|x| x.ceil() as i32 >> 3).into();
+    let hi: [i32; 3] = ((c + e) * inv).map(|x| x.floor() as i32 >> 3).into();
+    (lo, hi)
 }
 
-/// Sorted, deduplicated union of per-thread key sets.
-fn key_set(it: impl ParallelIterator<Item = Key>) -> Vec<Key> {
-    let sets = it
-        .fold(FxMap::<Key, ()>::default, |mut m, k| {
-            m.insert(k, ());
+/// Blocks (at most this many) for which a dense table is used instead of hashing.
+const DENSE_BLOCKS: i64 = 1 << 24;
+
+/// Block origins (sorted, deduplicated) of the union of block boxes: a dense byte table over
+/// their bounds when that is small, per-thread hash sets otherwise.
+fn union_of_boxes(boxes: Vec<([i32; 3], [i32; 3])>) -> Vec<Key> {
+    if boxes.is_empty() {
+        return Vec::new();
+    }
+    let (lo, hi) = boxes
+        .iter()
+        .fold(([i32::MAX; 3], [i32::MIN; 3]), |(l, h), b| {
+            (
+                [l[0].min(b.0[0]), l[1].min(b.0[1]), l[2].min(b.0[2])],
+                [h[0].max(b.1[0]), h[1].max(b.1[1]), h[2].max(b.1[2])],
+            )
+        });
+    let d = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1).max(0) as i64);
+    if d[0] * d[1] * d[2] <= DENSE_BLOCKS {
+        let (dy, dz) = (d[1] as usize, d[2] as usize);
+        let mut mark = vec![false; (d[0] * d[1] * d[2]) as usize];
+        for (a, b) in &boxes {
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    let row = (((x - lo[0]) as usize) * dy + (y - lo[1]) as usize) * dz;
+                    mark[row + (a[2] - lo[2]) as usize..=row + (b[2] - lo[2]) as usize].fill(true);
+                }
+            }
+        }
+        return mark
+            .iter()
+            .enumerate()
+            .filter(|(_, &m)| m)
+            .map(|(n, _)| {
+                let (x, y, z) = (n / (dy * dz), n / dz % dy, n % dz);
+                [
+                    (x as i32 + lo[0]) * LEAF_DIM,
+                    (y as i32 + lo[1]) * LEAF_DIM,
+                    (z as i32 + lo[2]) * LEAF_DIM,
+                ]
+            })
+            .collect();
+    }
+    let sets = boxes
+        .par_iter()
+        .fold(FxMap::<Key, ()>::default, |mut m, (a, b)| {
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    for z in a[2]..=b[2] {
+                        m.insert([x * LEAF_DIM, y * LEAF_DIM, z * LEAF_DIM], ());
+                    }
+                }
+            }
             m
         })
         .reduce(FxMap::default, |mut a, b| {
-            if a.len() < b.len() {
-                return b.into_iter().fold(a, |mut m, (k, _)| {
-                    m.insert(k, ());
-                    m
-                });
-            }
             a.extend(b);
             a
         });
     let mut v: Vec<Key> = sets.into_keys().collect();
     v.par_sort_unstable();
     v
+}
+
+/// Block origin → index into a sorted list of blocks (dense table over their bounds when small).
+enum BlockIds {
+    Dense {
+        lo: [i32; 3],
+        d: [i32; 3],
+        id: Vec<u32>,
+    },
+    Sparse(FxMap<Key, u32>),
+}
+
+impl BlockIds {
+    fn new(blocks: &[Key]) -> Self {
+        let Some(first) = blocks.first() else {
+            return BlockIds::Sparse(FxMap::default());
+        };
+        let (mut lo, mut hi) = (*first, *first);
+        for b in blocks {
+            for a in 0..3 {
+                lo[a] = lo[a].min(b[a]);
+                hi[a] = hi[a].max(b[a]);
+            }
+        }
+        let lo = lo.map(|x| x >> 3);
+        let d = [0, 1, 2].map(|a| (hi[a] >> 3) - lo[a] + 1);
+        if (d[0] as i64) * (d[1] as i64) * (d[2] as i64) <= DENSE_BLOCKS {
+            let mut id = vec![u32::MAX; (d[0] * d[1] * d[2]) as usize];
+            for (n, b) in blocks.iter().enumerate() {
+                let q = [0, 1, 2].map(|a| (b[a] >> 3) - lo[a]);
+                id[((q[0] * d[1] + q[1]) * d[2] + q[2]) as usize] = n as u32;
+            }
+            BlockIds::Dense { lo, d, id }
+        } else {
+            BlockIds::Sparse(
+                blocks
+                    .iter()
+                    .enumerate()
+                    .map(|(n, &b)| (b, n as u32))
+                    .collect(),
+            )
+        }
+    }
+    /// Index of the block with block coordinates `q` (origin / 8).
+    #[inline]
+    fn get(&self, q: [i32; 3]) -> Option<u32> {
+        match self {
+            BlockIds::Dense { lo, d, id } => {
+                let r = [q[0] - lo[0], q[1] - lo[1], q[2] - lo[2]];
+                if (0..3).any(|a| r[a] < 0 || r[a] >= d[a]) {
+                    return None;
+                }
+                let v = id[((r[0] * d[1] + r[1]) * d[2] + r[2]) as usize];
+                (v != u32::MAX).then_some(v)
+            }
+            BlockIds::Sparse(m) => m.get(&q.map(|x| x * LEAF_DIM)).copied(),
+        }
+    }
 }
 
 /// Sums the kernels (with particle velocities `vel`, indexed by `k.index`) on the grid of voxel
@@ -105,54 +200,67 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
     let inv = 1.0 / h;
     let nk = k.center.len();
     let t0 = std::time::Instant::now();
-    let band = key_set(
+    let band = union_of_boxes(
         (0..nk)
             .into_par_iter()
             .filter(|&i| !k.deep[i])
-            .flat_map_iter(|i| {
+            .map(|i| {
                 let e = k.extent_of(i).add_scalar(2.0 * h).sup(&Vec3::repeat(reach));
-                blocks_of(k.center_of(i), e, inv)
-            }),
+                block_box(k.center_of(i), e, inv)
+            })
+            .collect(),
     );
-    let band_index: FxMap<Key, ()> = band.iter().map(|&b| (b, ())).collect();
-    let interior = key_set(
+    let ids = BlockIds::new(&band);
+    let mut interior = union_of_boxes(
         (0..nk)
             .into_par_iter()
             .filter(|&i| k.deep[i])
-            .flat_map_iter(|i| blocks_of(k.center_of(i), k.extent_of(i), inv))
-            .filter(|b| !band_index.contains_key(b)),
+            .map(|i| block_box(k.center_of(i), k.extent_of(i), inv))
+            .collect(),
     );
-    // (block, kernel) pairs in band blocks
-    let mut pairs: Vec<(Key, u32)> = (0..nk)
+    interior.retain(|b| ids.get(b.map(|x| x >> 3)).is_none());
+    // (band block, kernel) pairs, in kernel order, then grouped by block (counting sort: each
+    // block's kernels stay in kernel order)
+    let pairs: Vec<(u32, u32)> = (0..nk)
         .into_par_iter()
         .flat_map_iter(|i| {
-            blocks_of(k.center_of(i), k.extent_of(i), inv)
-                .filter(|b| band_index.contains_key(b))
-                .map(move |b| (b, i as u32))
+            let (a, b) = block_box(k.center_of(i), k.extent_of(i), inv);
+            let ids = &ids;
+            (a[0]..=b[0]).flat_map(move |x| {
+                (a[1]..=b[1]).flat_map(move |y| {
+                    (a[2]..=b[2]).filter_map(move |z| ids.get([x, y, z]).map(|id| (id, i as u32)))
+                })
+            })
         })
         .collect();
-    drop(band_index);
+    drop(ids);
     let t1 = t0.elapsed().as_secs_f64();
-    pairs.par_sort_unstable();
-    let t2 = t0.elapsed().as_secs_f64();
-    let mut groups: Vec<(usize, usize)> = Vec::new();
-    let mut s = 0;
-    while s < pairs.len() {
-        let mut e = s + 1;
-        while e < pairs.len() && pairs[e].0 == pairs[s].0 {
-            e += 1;
-        }
-        groups.push((s, e));
-        s = e;
+    let mut start = vec![0usize; band.len() + 1];
+    for &(b, _) in &pairs {
+        start[b as usize + 1] += 1;
     }
+    for b in 0..band.len() {
+        start[b + 1] += start[b];
+    }
+    let mut fill = start.clone();
+    let mut list = vec![0u32; pairs.len()];
+    for &(b, i) in &pairs {
+        list[fill[b as usize]] = i;
+        fill[b as usize] += 1;
+    }
+    drop((pairs, fill));
+    let t2 = t0.elapsed().as_secs_f64();
+    let groups: Vec<(Key, usize, usize)> = (0..band.len())
+        .filter(|&b| start[b + 1] > start[b])
+        .map(|b| (band[b], start[b], start[b + 1]))
+        .collect();
     let blocks: Vec<DensityBlock> = groups
         .par_iter()
-        .map(|&(s, e)| {
-            let origin = pairs[s].0;
+        .map(|&(origin, s, e)| {
             let mut f = [0f64; LEAF_SIZE];
             let mut m = [[0f64; 3]; LEAF_SIZE];
             let ob = Vec3::new(origin[0] as Real, origin[1] as Real, origin[2] as Real);
-            for &(_, pi) in &pairs[s..e] {
+            for &pi in &list[s..e] {
                 let i = pi as usize;
                 let ex = k.extent_of(i) * inv;
                 // centre in voxel units relative to the block; G in voxel units (q = Gv (x − c))
@@ -252,7 +360,7 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
             "density: sets+pairs {t1:.2} sort {:.2} blocks {:.2} s, {} pairs",
             t2 - t1,
             t0.elapsed().as_secs_f64() - t2,
-            pairs.len()
+            list.len()
         );
     }
     let index = blocks
@@ -306,6 +414,15 @@ impl SignField {
             interior_index,
         }
     }
+    /// Inside mask (bit n of word n/64) of the leaf at `origin`.
+    pub fn mask(&self, origin: Key) -> [u64; 8] {
+        match self.index.get(&origin) {
+            Some(&b) => self.blocks[b].1,
+            None if self.interior_index.contains_key(&origin) => [u64::MAX; 8],
+            None => [0; 8],
+        }
+    }
+
     /// Is voxel `ijk` inside (interior blocks: yes; outside every block: no)?
     #[inline]
     pub fn inside(&self, ijk: Key) -> bool {

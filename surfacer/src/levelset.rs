@@ -224,34 +224,35 @@ impl Prim {
     }
 }
 
-/// A leaf under construction.
+/// A leaf under construction (boxed, so that [`WorkGrid::finish`] frees each as it is converted).
 #[derive(Clone)]
 pub struct WorkLeaf {
     /// origin
     pub origin: Key,
     /// φ (m)
     pub phi: [f32; LEAF_SIZE],
-    /// velocity
-    pub vel: [[f32; 3]; LEAF_SIZE],
     /// closest surface point of each set voxel (m)
     pub cp: [[f32; 3]; LEAF_SIZE],
+    /// velocity source of each set voxel: index into [`WorkGrid::sources`]
+    pub src: [u32; LEAF_SIZE],
     /// voxels whose φ has been computed
     pub set: [u64; 8],
 }
 
 impl WorkLeaf {
-    /// A leaf whose voxels hold ±background by `inside(ijk)`.
-    pub fn new(origin: Key, bg: f32, inside: impl Fn(Key) -> bool) -> Self {
-        let mut l = WorkLeaf {
+    /// A leaf whose voxels hold −background where `inside` (bit n of word n/64) and +background
+    /// elsewhere.
+    pub fn new(origin: Key, bg: f32, inside: [u64; 8]) -> Box<Self> {
+        let mut l = Box::new(WorkLeaf {
             origin,
             phi: [bg; LEAF_SIZE],
-            vel: [[0.0; 3]; LEAF_SIZE],
             cp: [[0.0; 3]; LEAF_SIZE],
+            src: [u32::MAX; LEAF_SIZE],
             set: [0; 8],
-        };
-        for n in 0..LEAF_SIZE {
-            if inside(voxel_of(origin, n)) {
-                l.phi[n] = -bg;
+        });
+        for (n, v) in l.phi.iter_mut().enumerate() {
+            if inside[n >> 6] >> (n & 63) & 1 == 1 {
+                *v = -bg;
             }
         }
         l
@@ -270,9 +271,11 @@ pub struct WorkGrid {
     /// background (m)
     pub bg: f32,
     /// leaves
-    pub leaves: Vec<WorkLeaf>,
+    pub leaves: Vec<Box<WorkLeaf>>,
     /// origin → index into `leaves`
     pub index: FxMap<Key, usize>,
+    /// velocities of the surface points (seeds, then primitives) that voxels take theirs from
+    pub sources: Vec<[f32; 3]>,
 }
 
 impl WorkGrid {
@@ -283,6 +286,7 @@ impl WorkGrid {
             bg,
             leaves: Vec::new(),
             index: FxMap::default(),
+            sources: Vec::new(),
         }
     }
 
@@ -292,12 +296,13 @@ impl WorkGrid {
         Vec3::new(ijk[0] as Real, ijk[1] as Real, ijk[2] as Real) * self.voxel
     }
 
-    /// Index of the leaf at `origin`, creating it with signs from `inside`.
-    pub fn ensure(&mut self, origin: Key, inside: &(impl Fn(Key) -> bool + Sync)) -> usize {
+    /// Index of the leaf at `origin`, creating it with the inside mask `inside(origin)`.
+    pub fn ensure(&mut self, origin: Key, inside: &(impl Fn(Key) -> [u64; 8] + Sync)) -> usize {
         if let Some(&i) = self.index.get(&origin) {
             return i;
         }
-        self.leaves.push(WorkLeaf::new(origin, self.bg, inside));
+        self.leaves
+            .push(WorkLeaf::new(origin, self.bg, inside(origin)));
         self.index.insert(origin, self.leaves.len() - 1);
         self.leaves.len() - 1
     }
@@ -305,7 +310,11 @@ impl WorkGrid {
     /// Unions primitives (with their velocities) into the grid: φ = min(φ, sdf), velocity taken
     /// from the primitive wherever it is the closest surface. Primitives are applied in index
     /// order within each leaf, so the result does not depend on the thread count.
-    pub fn union_prims(&mut self, prims: &[(Prim, Vec3)], inside: &(impl Fn(Key) -> bool + Sync)) {
+    pub fn union_prims(
+        &mut self,
+        prims: &[(Prim, Vec3)],
+        inside: &(impl Fn(Key) -> [u64; 8] + Sync),
+    ) {
         let h = self.voxel;
         let margin = self.bg as Real + h;
         let mut pairs: Vec<(Key, u32)> = Vec::new();
@@ -343,12 +352,18 @@ impl WorkGrid {
             lists[li].push(pi);
         }
         let bg = self.bg;
+        let base = self.sources.len() as u32;
+        self.sources.extend(
+            prims
+                .iter()
+                .map(|(_, v)| [v.x as f32, v.y as f32, v.z as f32]),
+        );
         self.leaves
             .par_iter_mut()
             .zip(lists.par_iter())
             .for_each(|(leaf, list)| {
                 for &pi in list {
-                    let (prim, v) = &prims[pi as usize];
+                    let (prim, _) = &prims[pi as usize];
                     let (lo, hi) = boxes[pi as usize];
                     let o = leaf.origin;
                     for x in lo.x.max(o[0])..=hi.x.min(o[0] + 7) {
@@ -359,7 +374,7 @@ impl WorkGrid {
                                 let n = voxel_index([x, y, z]);
                                 if d < leaf.phi[n] {
                                     leaf.phi[n] = d;
-                                    leaf.vel[n] = [v.x as f32, v.y as f32, v.z as f32];
+                                    leaf.src[n] = base + pi;
                                     leaf.set[n >> 6] |= 1 << (n & 63);
                                 }
                             }
@@ -374,6 +389,7 @@ impl WorkGrid {
     pub fn finish(self, extra_inside: Vec<Key>) -> LevelSet {
         let bg = self.bg;
         let present: FxMap<Key, ()> = self.leaves.iter().map(|l| (l.origin, ())).collect();
+        let sources = &self.sources;
         let done: Vec<(Option<Leaf>, Option<Key>)> = self
             .leaves
             .into_par_iter()
@@ -397,7 +413,12 @@ impl WorkGrid {
                 if active.iter().all(|&a| a == 0) {
                     return (None, (neg * 2 > LEAF_SIZE).then_some(w.origin));
                 }
-                let vel = Box::new(w.vel);
+                let mut vel = Box::new([[0f32; 3]; LEAF_SIZE]);
+                for (v, &s) in vel.iter_mut().zip(w.src.iter()) {
+                    if let Some(u) = sources.get(s as usize) {
+                        *v = *u;
+                    }
+                }
                 (
                     Some(Leaf {
                         origin: w.origin,

@@ -241,8 +241,7 @@ pub fn surface_particles(
     let tubes = tube_prims(frame, &chains, h, &o.filaments);
     let mut prims = disks.clone();
     prims.extend_from_slice(&tubes);
-    let inside = |ijk| signs.inside(ijk);
-    grid.union_prims(&prims, &inside);
+    grid.union_prims(&prims, &|o| signs.mask(o));
     st.grid_bytes =
         dens_bytes + grid.leaves.len() * std::mem::size_of::<crate::levelset::WorkLeaf>();
     drop(signs);

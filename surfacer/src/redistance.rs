@@ -30,8 +30,8 @@ pub struct RedistanceInfo {
 }
 
 type Entry = (Key, f32, [f32; 3], [f32; 3]);
-/// A propagated voxel: (index in leaf, φ, closest point, velocity).
-type Update = (usize, f32, [f32; 3], [f32; 3]);
+/// A propagated voxel: (index in leaf, φ, closest point, velocity source).
+type Update = (usize, f32, [f32; 3], u32);
 
 /// Builds the band of half width `band`·Δx around f = `iso`. The field is consumed once the seeds
 /// are taken (only its signs are kept). Returns the grid, the origins of density blocks entirely
@@ -116,21 +116,23 @@ pub fn redistance(
     let signs = SignField::new(&d, iso);
     drop(d);
     let inside = |ijk: Key| signs.inside(ijk);
+    let mask = |o: Key| signs.mask(o);
     info.flat_gradient = seeds.iter().filter(|s| s.1).count();
 
     let mut grid = WorkGrid::new(h, bg);
     // `front[li]`: voxels of leaf li set in the previous layer
     let mut front: Vec<[u64; 8]> = Vec::new();
     for (e, _) in &seeds {
-        let li = grid.ensure(leaf_origin(e.0), &inside);
+        let li = grid.ensure(leaf_origin(e.0), &mask);
         if li >= front.len() {
             front.resize(li + 1, [0; 8]);
         }
-        let l = &mut grid.leaves[li];
         let n = voxel_index(e.0);
+        let l = &mut grid.leaves[li];
         l.phi[n] = e.1;
         l.cp[n] = e.2;
-        l.vel[n] = e.3;
+        l.src[n] = grid.sources.len() as u32;
+        grid.sources.push(e.3);
         l.set[n >> 6] |= 1 << (n & 63);
         front[li][n >> 6] |= 1 << (n & 63);
     }
@@ -173,7 +175,7 @@ pub fn redistance(
         need.sort_unstable();
         need.dedup();
         for k in need {
-            grid.ensure(k, &inside);
+            grid.ensure(k, &mask);
         }
         front.resize(grid.leaves.len(), [0; 8]);
         // leaves that may receive new values: those with or next to front voxels
@@ -257,7 +259,7 @@ pub fn redistance(
                         1.0
                     };
                     let src = &g.leaves[best.1];
-                    out.push((n, (s * best.0) as f32, src.cp[best.2], src.vel[best.2]));
+                    out.push((n, (s * best.0) as f32, src.cp[best.2], src.src[best.2]));
                 }
                 (!out.is_empty()).then_some((li, out))
             })
@@ -270,10 +272,10 @@ pub fn redistance(
         }
         for (li, list) in updates {
             let l = &mut grid.leaves[li];
-            for (n, phi, cp, vel) in list {
+            for (n, phi, cp, from) in list {
                 l.phi[n] = phi;
                 l.cp[n] = cp;
-                l.vel[n] = vel;
+                l.src[n] = from;
                 l.set[n >> 6] |= 1 << (n & 63);
                 front[li][n >> 6] |= 1 << (n & 63);
                 info.propagated += 1;
