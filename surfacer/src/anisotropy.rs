@@ -122,6 +122,10 @@ pub fn is_deep(n_with_self: usize, mean_offset: Real, r: Real, vol: Real) -> boo
 #[derive(Default)]
 struct Candidates {
     cell: Option<crate::hash::Key>,
+    /// fewest particles in one of the 27 cells (0 if one is empty)
+    min_count: u32,
+    /// candidate arrays filled for `cell`
+    built: bool,
     x: Vec<f32>,
     y: Vec<f32>,
     z: Vec<f32>,
@@ -253,8 +257,8 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
         let xi = sorted[k];
         let key = grid.cell_key(&xi);
         let corner = Vec3::new(key[0] as Real, key[1] as Real, key[2] as Real) * cs;
-        if cand.cell != Some(key) {
-            cand.cell = Some(key);
+        if !cand.built {
+            cand.built = true;
             cand.x.clear();
             cand.y.clear();
             cand.z.clear();
@@ -311,6 +315,37 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
     type Rec = ([f32; 3], [f32; 6], f32, [f32; 3], bool, bool);
     let kernel_of = |cand: &mut Candidates, k: usize, i: usize| -> Rec {
         let xi = pos[i];
+        let key = grid.cell_key(&sorted[k]);
+        if cand.cell != Some(key) {
+            cand.cell = Some(key);
+            cand.built = false;
+            cand.min_count = u32::MAX;
+            for d in 0..27 {
+                let c = [
+                    key[0] + d / 9 - 1,
+                    key[1] + d / 3 % 3 - 1,
+                    key[2] + d % 3 - 1,
+                ];
+                let m = grid.cell_range(c).map_or(0, |(s, e)| e - s);
+                cand.min_count = cand.min_count.min(m);
+            }
+        }
+        if cand.min_count as Real >= 0.5 * cs * cs * cs / vol[i] {
+            // every cell of the 3×3×3 block around (side 3r) holds ≥ 50 % of a uniform lattice's
+            // count: a free surface cuts at most half of an outer cell, so it is ≥ r/2 away and
+            // the particle is deep (≥ 0.45 r, see [`is_deep`]). Fast path: no neighbourhood sums,
+            // and no centre smoothing, which on a full symmetric neighbourhood would only move
+            // the centre by λ times the particle's offset from its neighbours' mean
+            let s = 1.0 / h;
+            return (
+                v3(&xi),
+                sym(&(Mat3::identity() * s)),
+                (SIGMA_P * s * s * s * vol[i]) as f32,
+                v3(&Vec3::repeat(h)),
+                !p.anisotropic,
+                true,
+            );
+        }
         let (n_all, wsum, m1, m2) = sums(cand, k);
         let n = n_all.saturating_sub(1);
         let mean = m1 / wsum;
