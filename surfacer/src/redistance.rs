@@ -46,10 +46,40 @@ pub fn redistance(
     let world = |k: Key| Vec3::new(k[0] as Real, k[1] as Real, k[2] as Real) * h;
     let mut info = RedistanceInfo::default();
 
+    // blocks entirely on one side of the iso-value (1 inside, 2 outside, 0 mixed)
+    let side: Vec<u8> = d
+        .blocks
+        .par_iter()
+        .map(|b| {
+            let n_in = b.f.iter().filter(|&&f| f >= iso).count();
+            match n_in {
+                LEAF_SIZE => 1,
+                0 => 2,
+                _ => 0,
+            }
+        })
+        .collect();
+    // a uniform block whose six face neighbours are uniform on the same side has no seeds
+    let no_seeds = |bi: usize| {
+        let sd = side[bi];
+        let o = d.blocks[bi].origin;
+        sd != 0
+            && (0..6).all(|f| {
+                let mut q = o;
+                q[f / 2] += if f % 2 == 0 { -8 } else { 8 };
+                match d.index.get(&q) {
+                    Some(&j) => side[j] == sd,
+                    None if d.interior.binary_search(&q).is_ok() => sd == 1,
+                    None => sd == 2,
+                }
+            })
+    };
     let seeds: Vec<(Entry, bool)> = d
         .blocks
         .par_iter()
-        .flat_map_iter(|b| {
+        .enumerate()
+        .filter(|(bi, _)| !no_seeds(*bi))
+        .flat_map_iter(|(_, b)| {
             let mut out = Vec::new();
             for n in 0..LEAF_SIZE {
                 let ijk = voxel_of(b.origin, n);
@@ -458,7 +488,12 @@ pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, ban
         if area.is_nan() || area <= 0.0 {
             break;
         }
-        shift = (shift + (vol - target) / area).clamp(-lim, lim);
+        let next = (shift + (vol - target) / area).clamp(-lim, lim);
+        let step = (next - shift).abs();
+        shift = next;
+        if step < 1e-4 * h {
+            break;
+        }
     }
     let bg = grid.bg;
     grid.leaves.par_iter_mut().for_each(|l| {
