@@ -199,7 +199,6 @@ impl BlockIds {
 pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityField {
     let inv = 1.0 / h;
     let nk = k.center.len();
-    let t0 = std::time::Instant::now();
     let band = union_of_boxes(
         (0..nk)
             .into_par_iter()
@@ -234,7 +233,6 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
         })
         .collect();
     drop(ids);
-    let t1 = t0.elapsed().as_secs_f64();
     let mut start = vec![0usize; band.len() + 1];
     for &(b, _) in &pairs {
         start[b as usize + 1] += 1;
@@ -249,7 +247,6 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
         fill[b as usize] += 1;
     }
     drop((pairs, fill));
-    let t2 = t0.elapsed().as_secs_f64();
     let groups: Vec<(Key, usize, usize)> = (0..band.len())
         .filter(|&b| start[b + 1] > start[b])
         .map(|b| (band[b], start[b], start[b + 1]))
@@ -355,14 +352,6 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
             }
         })
         .collect();
-    if std::env::var("SURFACER_DEBUG").is_ok() {
-        eprintln!(
-            "density: sets+pairs {t1:.2} sort {:.2} blocks {:.2} s, {} pairs",
-            t2 - t1,
-            t0.elapsed().as_secs_f64() - t2,
-            list.len()
-        );
-    }
     let index = blocks
         .iter()
         .enumerate()

@@ -223,9 +223,6 @@ pub fn surface_particles(
     let t = Instant::now();
     let (mut grid, extra_inside, signs, info): (WorkGrid, _, _, _) = redistance(dens, iso, band);
     st.redistance = info;
-    if std::env::var("SURFACER_DEBUG").is_ok() {
-        eprintln!("redistance {:.2} s", t.elapsed().as_secs_f64());
-    }
     if o.smooth_iterations > 0 && !vi.is_empty() {
         crate::redistance::smooth_band(&mut grid, &|k| signs.inside(k), o.smooth_iterations);
     }

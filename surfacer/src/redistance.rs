@@ -142,7 +142,6 @@ pub fn redistance(
         })
         .collect();
     info.seeds = seeds.len();
-    let t0 = std::time::Instant::now();
     let signs = SignField::new(&d, iso);
     drop(d);
     let inside = |ijk: Key| signs.inside(ijk);
@@ -313,9 +312,6 @@ pub fn redistance(
         }
     }
 
-    if std::env::var("SURFACER_DEBUG").is_ok() {
-        eprintln!("propagation {:.2} s", t0.elapsed().as_secs_f64());
-    }
     let extra_inside: Vec<Key> = signs
         .blocks
         .par_iter()
@@ -407,11 +403,11 @@ pub fn smooth_band(grid: &mut WorkGrid, inside: &(impl Fn(Key) -> bool + Sync), 
                     }
                 }
                 let mut phi = l.phi;
-                for n in 0..LEAF_SIZE {
+                for (n, v) in phi.iter_mut().enumerate() {
                     if l.is_set(n) {
                         let k = voxel_of([1, 1, 1], n);
                         let (x, y, z) = (k[0] as usize, k[1] as usize, k[2] as usize);
-                        phi[n] =
+                        *v =
                             0.25 * (b[at(x, y, z - 1)] + 2.0 * b[at(x, y, z)] + b[at(x, y, z + 1)]);
                     }
                 }
