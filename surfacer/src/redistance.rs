@@ -14,7 +14,7 @@
 //! The sign of every voxel comes from f itself, so inside never depends on the propagation.
 use crate::density::{DensityField, SignField};
 use crate::hash::Key;
-use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, LEAF_SIZE};
+use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, WorkLeaf, LEAF_SIZE};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -149,21 +149,38 @@ pub fn redistance(
     info.flat_gradient = seeds.iter().filter(|s| s.1).count();
 
     let mut grid = WorkGrid::new(h, bg);
-    // `front[li]`: voxels of leaf li set in the previous layer
-    let mut front: Vec<[u64; 8]> = Vec::new();
-    for (e, _) in &seeds {
-        let li = grid.ensure(leaf_origin(e.0), &mask);
-        if li >= front.len() {
-            front.resize(li + 1, [0; 8]);
+    // seeds come block by block: one leaf per run of seeds, built in parallel; seed k is velocity
+    // source k. `front[li]`: voxels of leaf li set in the previous layer
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for (k, (e, _)) in seeds.iter().enumerate() {
+        match runs.last_mut() {
+            Some(r) if leaf_origin(seeds[r.0].0 .0) == leaf_origin(e.0) => r.1 = k + 1,
+            _ => runs.push((k, k + 1)),
         }
-        let n = voxel_index(e.0);
-        let l = &mut grid.leaves[li];
-        l.phi[n] = e.1;
-        l.cp[n] = e.2;
-        l.src[n] = grid.sources.len() as u32;
-        grid.sources.push(e.3);
-        l.set[n >> 6] |= 1 << (n & 63);
-        front[li][n >> 6] |= 1 << (n & 63);
+    }
+    let sd = &seeds;
+    let built: Vec<(Box<WorkLeaf>, [u64; 8])> = runs
+        .par_iter()
+        .map(|&(a, b)| {
+            let origin = leaf_origin(sd[a].0 .0);
+            let mut l = WorkLeaf::new(origin, bg, mask(origin));
+            for (k, (e, _)) in sd[a..b].iter().enumerate() {
+                let n = voxel_index(e.0);
+                l.phi[n] = e.1;
+                l.cp[n] = e.2;
+                l.src[n] = (a + k) as u32;
+                l.set[n >> 6] |= 1 << (n & 63);
+            }
+            let set = l.set;
+            (l, set)
+        })
+        .collect();
+    grid.sources = seeds.par_iter().map(|(e, _)| e.3).collect();
+    let mut front: Vec<[u64; 8]> = Vec::with_capacity(built.len());
+    for (l, set) in built {
+        grid.index.insert(l.origin, grid.leaves.len());
+        grid.leaves.push(l);
+        front.push(set);
     }
     drop(seeds);
 
