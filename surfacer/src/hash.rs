@@ -2,6 +2,7 @@
 //! integer keys (std's SipHash is needlessly slow for voxel keys) and a cell grid for
 //! fixed-radius neighbour queries with deterministic (index-sorted) cell contents.
 use crate::{Real, Vec3};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -97,7 +98,7 @@ impl CellGrid {
             .enumerate()
             .map(|(i, p)| (cell_of(p, inv_h), i as u32))
             .collect();
-        keyed.sort_unstable();
+        keyed.par_sort_unstable();
         let mut cells = FxMap::default();
         let mut s = 0;
         while s < keyed.len() {

@@ -194,17 +194,10 @@ pub fn redistance(
                 continue;
             }
             let o = grid.leaves[li].origin;
-            let mut lo = [false; 3];
-            let mut hi = [false; 3];
-            for n in 0..LEAF_SIZE {
-                if fr[n >> 6] >> (n & 63) & 1 == 1 {
-                    let k = voxel_of([0, 0, 0], n);
-                    for a in 0..3 {
-                        lo[a] |= k[a] == 0;
-                        hi[a] |= k[a] == 7;
-                    }
-                }
-            }
+            // faces touched by the front (layout: word x, bit 8y + z)
+            let any = fr.iter().fold(0u64, |a, &w| a | w);
+            let lo = [fr[0] != 0, any & 0xFF != 0, any & Z0 != 0];
+            let hi = [fr[7] != 0, any >> 56 != 0, any & Z7 != 0];
             for dx in -1i32..=1 {
                 for dy in -1i32..=1 {
                     for dz in -1i32..=1 {
