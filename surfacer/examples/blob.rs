@@ -83,6 +83,10 @@ fn main() {
         std::fs::write(path, b).unwrap();
         return;
     }
+    if std::env::var("STAGES").is_ok() {
+        stages(&f);
+        return;
+    }
     let base = CUR.load(Ordering::Relaxed);
     PEAK.store(base, Ordering::Relaxed);
     let o = SurfaceOptions {
@@ -149,4 +153,44 @@ fn debug_deep(f: &ParticleFrame) {
         }
     }
     eprintln!("non-deep by depth (Δ) in the ball: {hist:?} of {tot:?}");
+}
+
+/// The pipeline's volume stages one by one, with the heap peak of each (MB).
+fn stages(f: &ParticleFrame) {
+    let mb = |x: usize| x as f64 / 1e6;
+    let mark = |what: &str| {
+        println!(
+            "{what}: peak {:.0} MB, now {:.0} MB",
+            mb(PEAK.load(Ordering::Relaxed)),
+            mb(CUR.load(Ordering::Relaxed))
+        );
+        PEAK.store(CUR.load(Ordering::Relaxed), Ordering::Relaxed);
+    };
+    mark("input");
+    let o = SurfaceOptions::default();
+    let dx = surfacer::pipeline::volume_spacing(f).unwrap();
+    let h = dx / 2.0;
+    let vol: Vec<f64> = f
+        .pscale
+        .iter()
+        .map(|p| 4.0 / 3.0 * std::f64::consts::PI * p.powi(3))
+        .collect();
+    let k = surfacer::anisotropy::build_kernels(&f.pos, &vol, dx, &o.aniso);
+    mark("kernels");
+    let d = surfacer::density::rasterize(&k, &f.vel, h, 3.0 * dx + 2.0 * h);
+    drop(k);
+    mark("density");
+    let (mut grid, extra, signs, _) = surfacer::redistance::redistance(d, 0.5, 3.0);
+    mark("redistance");
+    surfacer::redistance::smooth_band(&mut grid, &|k| signs.inside(k), 1);
+    surfacer::redistance::conserve_volume(&mut grid, &signs, f.len() as f64 * dx.powi(3), 3.0);
+    drop(signs);
+    mark("smooth+volume");
+    let ls = grid.finish(extra);
+    mark("finish");
+    let m = surfacer::mesh::marching_cubes(&ls);
+    mark("mesh");
+    let _ = surfacer::vdb::encode(&ls);
+    mark("vdb encode");
+    drop(m);
 }

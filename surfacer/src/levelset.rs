@@ -231,8 +231,9 @@ pub struct WorkLeaf {
     pub origin: Key,
     /// φ (m)
     pub phi: [f32; LEAF_SIZE],
-    /// closest surface point of each set voxel (m)
-    pub cp: [[f32; 3]; LEAF_SIZE],
+    /// closest surface point of each set voxel, as an offset from the voxel in units of
+    /// [`crate::redistance::CP_UNIT`] voxels
+    pub cp: [[i16; 3]; LEAF_SIZE],
     /// velocity source of each set voxel: index into [`WorkGrid::sources`]
     pub src: [u32; LEAF_SIZE],
     /// voxels whose φ has been computed
@@ -246,7 +247,7 @@ impl WorkLeaf {
         let mut l = Box::new(WorkLeaf {
             origin,
             phi: [bg; LEAF_SIZE],
-            cp: [[0.0; 3]; LEAF_SIZE],
+            cp: [[0; 3]; LEAF_SIZE],
             src: [u32::MAX; LEAF_SIZE],
             set: [0; 8],
         });

@@ -29,9 +29,14 @@ pub struct RedistanceInfo {
     pub propagated: usize,
 }
 
-type Entry = (Key, f32, [f32; 3], [f32; 3]);
-/// A propagated voxel: (index in leaf, φ, closest point, velocity source).
-type Update = (usize, f32, [f32; 3], u32);
+/// A seed: (voxel, φ, closest point as an offset (see [`CP_UNIT`]), velocity).
+type Entry = (Key, f32, [i16; 3], [f32; 3]);
+/// A propagated voxel: (index in leaf, φ, closest-point offset, velocity source).
+type Update = (usize, f32, [i16; 3], u32);
+
+/// Closest points are stored as offsets from their voxel in units of 1/4096 voxel (range ±8
+/// voxels; propagation keeps them within band + 1): exact integer shifts from voxel to voxel.
+pub const CP_UNIT: Real = 1.0 / 4096.0;
 
 /// Builds the band of half width `band`·Δx around f = `iso`. The field is consumed once the seeds
 /// are taken (only its signs are kept). Returns the grid, the origins of density blocks entirely
@@ -43,7 +48,6 @@ pub fn redistance(
 ) -> (WorkGrid, Vec<Key>, SignField, RedistanceInfo) {
     let h = d.voxel;
     let bg = (band * h) as f32;
-    let world = |k: Key| Vec3::new(k[0] as Real, k[1] as Real, k[2] as Real) * h;
     let mut info = RedistanceInfo::default();
 
     // blocks entirely on one side of the iso-value (1 inside, 2 outside, 0 mixed)
@@ -74,12 +78,13 @@ pub fn redistance(
                 }
             })
     };
-    let seeds: Vec<(Entry, bool)> = d
+    // seeds per block (each list sized exactly: no doubling of one large vector)
+    let seeds: Vec<Vec<(Entry, bool)>> = d
         .blocks
         .par_iter()
         .enumerate()
         .filter(|(bi, _)| !no_seeds(*bi))
-        .flat_map_iter(|(_, b)| {
+        .map(|(_, b)| {
             let mut out = Vec::new();
             for n in 0..LEAF_SIZE {
                 let ijk = voxel_of(b.origin, n);
@@ -123,48 +128,43 @@ pub fn redistance(
                 let phi = (1.0 / inv2.sqrt()) * if ins { -1.0 } else { 1.0 };
                 let gn = grad.norm();
                 let flat = gn.is_nan() || gn <= 0.0;
-                let cp = if flat {
-                    world(ijk)
+                // closest point x + φ ∇f/|∇f|, as an offset in voxels
+                let off = if flat {
+                    Vec3::zeros()
                 } else {
-                    world(ijk) + phi * grad / gn
+                    phi * grad / (gn * h)
                 };
-                out.push((
-                    (
-                        ijk,
-                        phi as f32,
-                        [cp.x as f32, cp.y as f32, cp.z as f32],
-                        vel,
-                    ),
-                    flat,
-                ));
+                let q = |v: Real| (v / CP_UNIT).round().clamp(-32767.0, 32767.0) as i16;
+                out.push(((ijk, phi as f32, [q(off.x), q(off.y), q(off.z)], vel), flat));
             }
+            out.shrink_to_fit();
             out
         })
+        .filter(|v| !v.is_empty())
         .collect();
-    info.seeds = seeds.len();
+    info.seeds = seeds.iter().map(|v| v.len()).sum();
     let signs = SignField::new(&d, iso);
     drop(d);
     let inside = |ijk: Key| signs.inside(ijk);
     let mask = |o: Key| signs.mask(o);
-    info.flat_gradient = seeds.iter().filter(|s| s.1).count();
+    info.flat_gradient = seeds.iter().flatten().filter(|s| s.1).count();
 
     let mut grid = WorkGrid::new(h, bg);
-    // seeds come block by block: one leaf per run of seeds, built in parallel; seed k is velocity
+    // one leaf per block with seeds, built in parallel; seed k (in block order) is velocity
     // source k. `front[li]`: voxels of leaf li set in the previous layer
-    let mut runs: Vec<(usize, usize)> = Vec::new();
-    for (k, (e, _)) in seeds.iter().enumerate() {
-        match runs.last_mut() {
-            Some(r) if leaf_origin(seeds[r.0].0 .0) == leaf_origin(e.0) => r.1 = k + 1,
-            _ => runs.push((k, k + 1)),
-        }
+    let mut base = Vec::with_capacity(seeds.len());
+    let mut total = 0usize;
+    for v in &seeds {
+        base.push(total);
+        total += v.len();
     }
-    let sd = &seeds;
-    let built: Vec<(Box<WorkLeaf>, [u64; 8])> = runs
+    let built: Vec<(Box<WorkLeaf>, [u64; 8])> = seeds
         .par_iter()
-        .map(|&(a, b)| {
-            let origin = leaf_origin(sd[a].0 .0);
+        .zip(base.par_iter())
+        .map(|(list, &a)| {
+            let origin = leaf_origin(list[0].0 .0);
             let mut l = WorkLeaf::new(origin, bg, mask(origin));
-            for (k, (e, _)) in sd[a..b].iter().enumerate() {
+            for (k, (e, _)) in list.iter().enumerate() {
                 let n = voxel_index(e.0);
                 l.phi[n] = e.1;
                 l.cp[n] = e.2;
@@ -175,7 +175,7 @@ pub fn redistance(
             (l, set)
         })
         .collect();
-    grid.sources = seeds.par_iter().map(|(e, _)| e.3).collect();
+    grid.sources = seeds.iter().flatten().map(|(e, _)| e.3).collect();
     let mut front: Vec<[u64; 8]> = Vec::with_capacity(built.len());
     for (l, set) in built {
         grid.index.insert(l.origin, grid.leaves.len());
@@ -268,8 +268,8 @@ pub fn redistance(
                         continue;
                     }
                     let k = voxel_of([0, 0, 0], n);
-                    let mut best = (Real::INFINITY, 0usize, 0usize);
-                    let x = world([o[0] + k[0], o[1] + k[1], o[2] + k[2]]);
+                    // nearest closest point among the set neighbours, in voxel units
+                    let mut best = (i64::MAX, [0i16; 3], 0u32);
                     for dx in -1..=1 {
                         for dy in -1..=1 {
                             for dz in -1..=1 {
@@ -278,18 +278,25 @@ pub fn redistance(
                                 };
                                 let lj = &g.leaves[j];
                                 if lj.is_set(m) {
-                                    let cp = lj.cp[m];
-                                    let cp = Vec3::new(cp[0] as Real, cp[1] as Real, cp[2] as Real);
-                                    let dist = (x - cp).norm_squared();
-                                    if dist < best.0 {
-                                        best = (dist, j, m);
+                                    let c = lj.cp[m];
+                                    let e = [
+                                        c[0] as i64 + dx as i64 * 4096,
+                                        c[1] as i64 + dy as i64 * 4096,
+                                        c[2] as i64 + dz as i64 * 4096,
+                                    ];
+                                    let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                                    if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
+                                        best = (d2, e.map(|v| v as i16), lj.src[m]);
                                     }
                                 }
                             }
                         }
                     }
-                    best.0 = best.0.sqrt();
-                    if best.0 > limit {
+                    if best.0 == i64::MAX {
+                        continue;
+                    }
+                    let dist = (best.0 as Real).sqrt() * CP_UNIT * h;
+                    if dist > limit {
                         continue;
                     }
                     let s = if inside([o[0] + k[0], o[1] + k[1], o[2] + k[2]]) {
@@ -297,8 +304,7 @@ pub fn redistance(
                     } else {
                         1.0
                     };
-                    let src = &g.leaves[best.1];
-                    out.push((n, (s * best.0) as f32, src.cp[best.2], src.src[best.2]));
+                    out.push((n, (s * dist) as f32, best.1, best.2));
                 }
                 (!out.is_empty()).then_some((li, out))
             })
