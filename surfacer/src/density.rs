@@ -19,8 +19,22 @@ pub struct DensityBlock {
     pub origin: Key,
     /// volume fraction (1 in the bulk)
     pub f: [f32; LEAF_SIZE],
-    /// kernel-weighted velocity (m/s)
-    pub vel: [[f32; 3]; LEAF_SIZE],
+    /// kernel-weighted velocity, quantised: v = vmin + q · vstep per component (exact where the
+    /// block's velocity is uniform; otherwise within (max − min)/131070 of the f32 value)
+    pub vq: [[u16; 3]; LEAF_SIZE],
+    /// lowest velocity of the block's voxels with f > 0 (m/s)
+    pub vmin: [f32; 3],
+    /// quantisation step (m/s)
+    pub vstep: [f32; 3],
+}
+
+impl DensityBlock {
+    /// Velocity of voxel `n` (m/s).
+    #[inline]
+    pub fn vel(&self, n: usize) -> [f32; 3] {
+        let q = self.vq[n];
+        [0, 1, 2].map(|a| self.vmin[a] + q[a] as f32 * self.vstep[a])
+    }
 }
 
 /// The blocked field.
@@ -53,13 +67,13 @@ impl DensityField {
     #[inline]
     pub fn vel(&self, ijk: Key) -> [f32; 3] {
         match self.index.get(&leaf_origin(ijk)) {
-            Some(&b) => self.blocks[b].vel[voxel_index(ijk)],
+            Some(&b) => self.blocks[b].vel(voxel_index(ijk)),
             None => [0.0; 3],
         }
     }
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.blocks.len() * LEAF_SIZE * 16
+        self.blocks.len() * std::mem::size_of::<DensityBlock>()
     }
 }
 
@@ -335,20 +349,46 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
             }
             let mut fo = [0f32; LEAF_SIZE];
             let mut vo = [[0f32; 3]; LEAF_SIZE];
+            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
             for n in 0..LEAF_SIZE {
                 fo[n] = f[n] as f32;
                 if f[n] > 0.0 {
-                    vo[n] = [
-                        (m[n][0] / f[n]) as f32,
-                        (m[n][1] / f[n]) as f32,
-                        (m[n][2] / f[n]) as f32,
-                    ];
+                    for a in 0..3 {
+                        let v = (m[n][a] / f[n]) as f32;
+                        vo[n][a] = v;
+                        lo[a] = lo[a].min(v);
+                        hi[a] = hi[a].max(v);
+                    }
+                }
+            }
+            let mut vmin = [0f32; 3];
+            let mut vstep = [0f32; 3];
+            for a in 0..3 {
+                if lo[a] < hi[a] {
+                    vmin[a] = lo[a];
+                    vstep[a] = (hi[a] - lo[a]) / 65535.0;
+                } else if lo[a] == hi[a] {
+                    vmin[a] = lo[a];
+                }
+            }
+            let mut vq = [[0u16; 3]; LEAF_SIZE];
+            for n in 0..LEAF_SIZE {
+                if f[n] > 0.0 {
+                    for a in 0..3 {
+                        if vstep[a] > 0.0 {
+                            vq[n][a] = ((vo[n][a] - vmin[a]) / vstep[a])
+                                .round()
+                                .clamp(0.0, 65535.0) as u16;
+                        }
+                    }
                 }
             }
             DensityBlock {
                 origin,
                 f: fo,
-                vel: vo,
+                vq,
+                vmin,
+                vstep,
             }
         })
         .collect();

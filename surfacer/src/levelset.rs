@@ -44,10 +44,28 @@ pub struct Leaf {
     pub origin: Key,
     /// signed distance (m), clamped to ±background; inside negative
     pub phi: Box<[f32; LEAF_SIZE]>,
-    /// velocity (m/s)
-    pub vel: Box<[[f32; 3]; LEAF_SIZE]>,
+    /// velocity (m/s) of the active voxels, in voxel order (inactive voxels have none: 0 in the
+    /// `v` grid)
+    pub vel: Vec<[f32; 3]>,
     /// active voxels (|φ| < background), bit n of word n/64
     pub active: [u64; 8],
+}
+
+impl Leaf {
+    /// Velocity of voxel `n` if it is active.
+    #[inline]
+    pub fn vel_at(&self, n: usize) -> Option<[f32; 3]> {
+        let (w, b) = (n >> 6, n & 63);
+        if self.active[w] >> b & 1 == 0 {
+            return None;
+        }
+        let rank = self.active[..w]
+            .iter()
+            .map(|x| x.count_ones() as usize)
+            .sum::<usize>()
+            + (self.active[w] & ((1u64 << b) - 1)).count_ones() as usize;
+        self.vel.get(rank).copied()
+    }
 }
 
 /// A finished sparse level set with voxel centres at `ijk · voxel`.
@@ -104,10 +122,10 @@ impl LevelSet {
     /// Velocity at voxel `ijk` (zero away from the band).
     pub fn velocity(&self, ijk: Key) -> Vec3 {
         match self.leaf(leaf_origin(ijk)) {
-            Some(l) => {
-                let v = l.vel[voxel_index(ijk)];
-                Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real)
-            }
+            Some(l) => match l.vel_at(voxel_index(ijk)) {
+                Some(v) => Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real),
+                None => Vec3::zeros(),
+            },
             None => Vec3::zeros(),
         }
     }
@@ -144,7 +162,11 @@ impl LevelSet {
 
     /// Bytes held by the leaves and tiles.
     pub fn memory_bytes(&self) -> usize {
-        self.leaves.len() * (std::mem::size_of::<Leaf>() + LEAF_SIZE * 16) + self.inside.len() * 24
+        self.leaves
+            .iter()
+            .map(|l| std::mem::size_of::<Leaf>() + LEAF_SIZE * 4 + l.vel.len() * 12)
+            .sum::<usize>()
+            + self.inside.len() * 24
     }
 }
 
@@ -414,10 +436,15 @@ impl WorkGrid {
                 if active.iter().all(|&a| a == 0) {
                     return (None, (neg * 2 > LEAF_SIZE).then_some(w.origin));
                 }
-                let mut vel = Box::new([[0f32; 3]; LEAF_SIZE]);
-                for (v, &s) in vel.iter_mut().zip(w.src.iter()) {
-                    if let Some(u) = sources.get(s as usize) {
-                        *v = *u;
+                let mut vel = Vec::with_capacity(
+                    active
+                        .iter()
+                        .map(|a| a.count_ones() as usize)
+                        .sum::<usize>(),
+                );
+                for n in 0..LEAF_SIZE {
+                    if active[n >> 6] >> (n & 63) & 1 == 1 {
+                        vel.push(sources.get(w.src[n] as usize).copied().unwrap_or([0.0; 3]));
                     }
                 }
                 (

@@ -157,17 +157,31 @@ struct Nbhd<'a> {
 
 impl Nbhd<'_> {
     #[inline]
-    fn at(&self, o: [i32; 3], l: [i32; 3]) -> (f32, [f32; 3]) {
+    fn at(&self, o: [i32; 3], l: [i32; 3]) -> (f32, Option<[f32; 3]>) {
         let s = ((l[0] >= LEAF_DIM) as usize) << 2
             | ((l[1] >= LEAF_DIM) as usize) << 1
             | (l[2] >= LEAF_DIM) as usize;
         match self.leaves[s] {
             Some(leaf) => {
                 let n = voxel_index([o[0] + l[0], o[1] + l[1], o[2] + l[2]]);
-                (leaf.phi[n], leaf.vel[n])
+                (leaf.phi[n], leaf.vel_at(n))
             }
-            None => (self.tile[s], [0.0; 3]),
+            None => (self.tile[s], None),
         }
+    }
+}
+
+/// Velocity at fraction `t` from a to b along an edge (an end without velocity, i.e. an inactive
+/// voxel, takes the other end's).
+#[inline]
+fn lerp_vel(va: Option<[f32; 3]>, vb: Option<[f32; 3]>, t: Real) -> [f32; 3] {
+    match (va, vb) {
+        (Some(a), Some(b)) => {
+            [0, 1, 2].map(|q| (a[q] as Real * (1.0 - t) + b[q] as Real * t) as f32)
+        }
+        (Some(a), None) => a,
+        (None, Some(b)) => b,
+        (None, None) => [0.0; 3],
     }
 }
 
@@ -253,7 +267,7 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
             for x in 0..LEAF_DIM {
                 for y in 0..LEAF_DIM {
                     for z in 0..LEAF_DIM {
-                        let mut val = [(0f32, [0f32; 3]); 8];
+                        let mut val = [(0f32, None); 8];
                         let mut mask = 0u8;
                         for (c, v) in val.iter_mut().enumerate() {
                             let d = corner(c as u8);
@@ -292,12 +306,10 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
                                 (cb[2] - ca[2]) as Real,
                             );
                             let p = (xa + t * d) * h;
-                            let v =
-                                |q: [f32; 3]| Vec3::new(q[0] as Real, q[1] as Real, q[2] as Real);
                             let i = verts.len() as u32;
-                            let u = v(va) * (1.0 - t) + v(vb) * t;
+                            let u = lerp_vel(va, vb, t);
                             let p32 = [p.x as f32, p.y as f32, p.z as f32];
-                            verts.push((key, p32, [u.x as f32, u.y as f32, u.z as f32]));
+                            verts.push((key, p32, u));
                             local.insert(key, i);
                             (i, v64(p32))
                         };
@@ -594,7 +606,7 @@ pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
                 for x in 0..LEAF_DIM {
                     for y in 0..LEAF_DIM {
                         for z in 0..LEAF_DIM {
-                            let mut val = [(0f32, [0f32; 3]); 8];
+                            let mut val = [(0f32, None); 8];
                             let mut mask = 0usize;
                             for (c, v) in val.iter_mut().enumerate() {
                                 let d = corner(c as u8);
@@ -624,10 +636,7 @@ pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
                                                 Vec3::new(g[0] as Real, g[1] as Real, g[2] as Real);
                                             p[axis] += tt;
                                             let p = p * h;
-                                            let u = |q: usize| {
-                                                (va[q] as Real * (1.0 - tt) + vb[q] as Real * tt)
-                                                    as f32
-                                            };
+                                            let u = lerp_vel(va, vb, tt);
                                             let mut d = [0i32; 3];
                                             d[axis] = 1;
                                             slot[sl] = verts.len() as u32;
@@ -635,7 +644,7 @@ pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
                                             verts.push((
                                                 edge_key(g, d),
                                                 [p.x as f32, p.y as f32, p.z as f32],
-                                                [u(0), u(1), u(2)],
+                                                u,
                                             ));
                                         }
                                         vid[e as usize] = slot[sl];

@@ -92,7 +92,7 @@ pub fn redistance(
                 let ins = f >= iso;
                 let mut inv2 = 0.0f64;
                 let mut grad = Vec3::zeros();
-                let mut vel = b.vel[n];
+                let mut vel = b.vel(n);
                 let mut any = false;
                 for a in 0..3 {
                     let mut dmin = Real::INFINITY;

@@ -229,7 +229,7 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
                     let raw = match kind {
                         Kind::Surface => f32_bytes(leaf.phi.iter().copied()),
                         Kind::Velocity => {
-                            f32_bytes(leaf.vel.iter().flat_map(|v| v.iter().copied()))
+                            f32_bytes((0..512).flat_map(|n| leaf.vel_at(n).unwrap_or([0.0; 3])))
                         }
                     };
                     b.values(&raw);
