@@ -327,6 +327,15 @@ pub fn redistance(
             }
         }
     }
+    // leaves the band never reached hold only ±background, which the signs give anyway
+    drop(front);
+    grid.leaves.retain(|l| l.set.iter().any(|&w| w != 0));
+    grid.index = grid
+        .leaves
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.origin, i))
+        .collect();
 
     let extra_inside: Vec<Key> = signs
         .blocks
