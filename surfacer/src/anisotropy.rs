@@ -71,8 +71,8 @@ pub struct Kernels {
     pub amp: Vec<f32>,
     /// half extents of the kernel's axis-aligned bounding box (m)
     pub extent: Vec<[f32; 3]>,
-    /// deep particles: full, symmetric neighbourhood (see [`is_deep`]); their kernels are
-    /// isotropic and they are at least ~0.6 r from any free surface
+    /// deep particles: full, symmetric neighbourhood (see [`is_deep`]), ≳ 0.45 r from any free
+    /// surface; the density is evaluated only near particles that are not deep
     pub deep: Vec<bool>,
     /// particles that kept the isotropic kernel (N ≤ N_ε or anisotropy off)
     pub isotropic: usize,
@@ -369,13 +369,6 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
         if n <= p.n_eps {
             return iso(p.kn, false);
         }
-        if deep {
-            // full symmetric neighbourhood: Σ̃ = I by the choice of k_s (fast path, no
-            // eigen-decomposition; such kernels lie ≥ 0.6 r inside and never shape the surface)
-            let mut r = iso(1.0, true);
-            r.4 = false;
-            return r;
-        }
         let c = Mat3::new(
             m2[0], m2[1], m2[2], m2[1], m2[3], m2[4], m2[2], m2[4], m2[5],
         ) / wsum
@@ -400,7 +393,7 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
             (SIGMA_P * det * vol[i]) as f32,
             v3(&ext),
             false,
-            false,
+            deep,
         )
     };
 
