@@ -85,11 +85,15 @@ fn block_box(c: Vec3, e: Vec3, inv: Real) -> ([i32; 3], [i32; 3]) {
 }
 
 /// Blocks (at most this many) for which a dense table is used instead of hashing.
-const DENSE_BLOCKS: i64 = 1 << 24;
+const DENSE_BLOCKS: i64 = 1 << 22;
 
 /// Block origins (sorted, deduplicated) of the union of block boxes: a dense byte table over
 /// their bounds when that is small, per-thread hash sets otherwise.
 fn union_of_boxes(boxes: Vec<([i32; 3], [i32; 3])>) -> Vec<Key> {
+    union_of_boxes_with(boxes, DENSE_BLOCKS)
+}
+
+fn union_of_boxes_with(boxes: Vec<([i32; 3], [i32; 3])>, dense_limit: i64) -> Vec<Key> {
     if boxes.is_empty() {
         return Vec::new();
     }
@@ -102,7 +106,7 @@ fn union_of_boxes(boxes: Vec<([i32; 3], [i32; 3])>) -> Vec<Key> {
             )
         });
     let d = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1).max(0) as i64);
-    if d[0] * d[1] * d[2] <= DENSE_BLOCKS {
+    if d[0] * d[1] * d[2] <= dense_limit {
         let (dy, dz) = (d[1] as usize, d[2] as usize);
         let mut mark = vec![false; (d[0] * d[1] * d[2]) as usize];
         for (a, b) in &boxes {
@@ -160,6 +164,9 @@ enum BlockIds {
 
 impl BlockIds {
     fn new(blocks: &[Key]) -> Self {
+        Self::new_with(blocks, DENSE_BLOCKS)
+    }
+    fn new_with(blocks: &[Key], dense_limit: i64) -> Self {
         let Some(first) = blocks.first() else {
             return BlockIds::Sparse(FxMap::default());
         };
@@ -172,7 +179,7 @@ impl BlockIds {
         }
         let lo = lo.map(|x| x >> 3);
         let d = [0, 1, 2].map(|a| (hi[a] >> 3) - lo[a] + 1);
-        if (d[0] as i64) * (d[1] as i64) * (d[2] as i64) <= DENSE_BLOCKS {
+        if (d[0] as i64) * (d[1] as i64) * (d[2] as i64) <= dense_limit {
             let mut id = vec![u32::MAX; (d[0] * d[1] * d[2]) as usize];
             for (n, b) in blocks.iter().enumerate() {
                 let q = [0, 1, 2].map(|a| (b[a] >> 3) - lo[a]);
@@ -462,6 +469,47 @@ impl SignField {
                 self.blocks[b].1[n >> 6] >> (n & 63) & 1 == 1
             }
             None => self.interior_index.contains_key(&o),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dense_and_hashed_block_sets_agree() {
+        let boxes = vec![
+            ([0, 0, 0], [2, 1, 3]),
+            ([-3, 1, 2], [-1, 1, 2]),
+            ([1, 1, 1], [4, 2, 2]),
+            ([40, -7, 9], [41, -7, 10]),
+        ];
+        let mut brute: Vec<Key> = Vec::new();
+        for (a, b) in &boxes {
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    for z in a[2]..=b[2] {
+                        brute.push([x * 8, y * 8, z * 8]);
+                    }
+                }
+            }
+        }
+        brute.sort_unstable();
+        brute.dedup();
+        let dense = union_of_boxes_with(boxes.clone(), i64::MAX);
+        let hashed = union_of_boxes_with(boxes, 0);
+        assert_eq!(dense, brute);
+        assert_eq!(hashed, brute);
+        for ids in [
+            BlockIds::new_with(&brute, i64::MAX),
+            BlockIds::new_with(&brute, 0),
+        ] {
+            for (n, b) in brute.iter().enumerate() {
+                assert_eq!(ids.get(b.map(|x| x >> 3)), Some(n as u32));
+            }
+            assert_eq!(ids.get([5, 5, 5]), None);
+            assert_eq!(ids.get([100, 0, 0]), None);
         }
     }
 }
