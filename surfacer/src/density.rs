@@ -19,8 +19,22 @@ pub struct DensityBlock {
     pub origin: Key,
     /// volume fraction (1 in the bulk)
     pub f: [f32; LEAF_SIZE],
-    /// kernel-weighted velocity (m/s)
-    pub vel: [[f32; 3]; LEAF_SIZE],
+    /// kernel-weighted velocity, quantised: v = vmin + q · vstep per component (exact where the
+    /// block's velocity is uniform; otherwise within (max − min)/131070 of the f32 value)
+    pub vq: [[u16; 3]; LEAF_SIZE],
+    /// lowest velocity of the block's voxels with f > 0 (m/s)
+    pub vmin: [f32; 3],
+    /// quantisation step (m/s)
+    pub vstep: [f32; 3],
+}
+
+impl DensityBlock {
+    /// Velocity of voxel `n` (m/s).
+    #[inline]
+    pub fn vel(&self, n: usize) -> [f32; 3] {
+        let q = self.vq[n];
+        [0, 1, 2].map(|a| self.vmin[a] + q[a] as f32 * self.vstep[a])
+    }
 }
 
 /// The blocked field.
@@ -32,14 +46,20 @@ pub struct DensityField {
     pub blocks: Vec<DensityBlock>,
     /// origin → index
     pub index: FxMap<Key, usize>,
+    /// origins of blocks (sorted) that only deep particles reach: entirely inside, never
+    /// evaluated
+    pub interior: Vec<Key>,
 }
 
 impl DensityField {
-    /// Volume fraction at voxel `ijk` (0 outside every block).
+    /// Volume fraction at voxel `ijk` (1, the bulk value, in interior blocks; 0 outside every
+    /// block).
     #[inline]
     pub fn f(&self, ijk: Key) -> f32 {
-        match self.index.get(&leaf_origin(ijk)) {
+        let o = leaf_origin(ijk);
+        match self.index.get(&o) {
             Some(&b) => self.blocks[b].f[voxel_index(ijk)],
+            None if self.interior.binary_search(&o).is_ok() => 1.0,
             None => 0.0,
         }
     }
@@ -47,111 +67,335 @@ impl DensityField {
     #[inline]
     pub fn vel(&self, ijk: Key) -> [f32; 3] {
         match self.index.get(&leaf_origin(ijk)) {
-            Some(&b) => self.blocks[b].vel[voxel_index(ijk)],
+            Some(&b) => self.blocks[b].vel(voxel_index(ijk)),
             None => [0.0; 3],
         }
     }
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.blocks.len() * LEAF_SIZE * 16
+        self.blocks.len() * std::mem::size_of::<DensityBlock>()
     }
 }
 
-/// Sums the kernels (with particle velocities `vel`, indexed by particle) on the grid of voxel
-/// size `h`.
-pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
+/// Block-index box (origins / 8, inclusive) overlapped by the box `c ± e` (voxel size `1/inv`).
+fn block_box(c: Vec3, e: Vec3, inv: Real) -> ([i32; 3], [i32; 3]) {
+    let lo: [i32; 3] = ((c - e) * inv).map(|x| x.ceil() as i32 >> 3).into();
+    let hi: [i32; 3] = ((c + e) * inv).map(|x| x.floor() as i32 >> 3).into();
+    (lo, hi)
+}
+
+/// Blocks (at most this many) for which a dense table is used instead of hashing.
+const DENSE_BLOCKS: i64 = 1 << 22;
+
+/// Block origins (sorted, deduplicated) of the union of block boxes: a dense byte table over
+/// their bounds when that is small, per-thread hash sets otherwise.
+fn union_of_boxes(boxes: Vec<([i32; 3], [i32; 3])>) -> Vec<Key> {
+    union_of_boxes_with(boxes, DENSE_BLOCKS)
+}
+
+fn union_of_boxes_with(boxes: Vec<([i32; 3], [i32; 3])>, dense_limit: i64) -> Vec<Key> {
+    if boxes.is_empty() {
+        return Vec::new();
+    }
+    let (lo, hi) = boxes
+        .iter()
+        .fold(([i32::MAX; 3], [i32::MIN; 3]), |(l, h), b| {
+            (
+                [l[0].min(b.0[0]), l[1].min(b.0[1]), l[2].min(b.0[2])],
+                [h[0].max(b.1[0]), h[1].max(b.1[1]), h[2].max(b.1[2])],
+            )
+        });
+    let d = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1).max(0) as i64);
+    if d[0] * d[1] * d[2] <= dense_limit {
+        let (dy, dz) = (d[1] as usize, d[2] as usize);
+        let mut mark = vec![false; (d[0] * d[1] * d[2]) as usize];
+        for (a, b) in &boxes {
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    let row = (((x - lo[0]) as usize) * dy + (y - lo[1]) as usize) * dz;
+                    mark[row + (a[2] - lo[2]) as usize..=row + (b[2] - lo[2]) as usize].fill(true);
+                }
+            }
+        }
+        return mark
+            .iter()
+            .enumerate()
+            .filter(|(_, &m)| m)
+            .map(|(n, _)| {
+                let (x, y, z) = (n / (dy * dz), n / dz % dy, n % dz);
+                [
+                    (x as i32 + lo[0]) * LEAF_DIM,
+                    (y as i32 + lo[1]) * LEAF_DIM,
+                    (z as i32 + lo[2]) * LEAF_DIM,
+                ]
+            })
+            .collect();
+    }
+    let sets = boxes
+        .par_iter()
+        .fold(FxMap::<Key, ()>::default, |mut m, (a, b)| {
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    for z in a[2]..=b[2] {
+                        m.insert([x * LEAF_DIM, y * LEAF_DIM, z * LEAF_DIM], ());
+                    }
+                }
+            }
+            m
+        })
+        .reduce(FxMap::default, |mut a, b| {
+            a.extend(b);
+            a
+        });
+    let mut v: Vec<Key> = sets.into_keys().collect();
+    v.par_sort_unstable();
+    v
+}
+
+/// Block origin → index into a sorted list of blocks (dense table over their bounds when small).
+enum BlockIds {
+    Dense {
+        lo: [i32; 3],
+        d: [i32; 3],
+        id: Vec<u32>,
+    },
+    Sparse(FxMap<Key, u32>),
+}
+
+impl BlockIds {
+    fn new(blocks: &[Key]) -> Self {
+        Self::new_with(blocks, DENSE_BLOCKS)
+    }
+    fn new_with(blocks: &[Key], dense_limit: i64) -> Self {
+        let Some(first) = blocks.first() else {
+            return BlockIds::Sparse(FxMap::default());
+        };
+        let (mut lo, mut hi) = (*first, *first);
+        for b in blocks {
+            for a in 0..3 {
+                lo[a] = lo[a].min(b[a]);
+                hi[a] = hi[a].max(b[a]);
+            }
+        }
+        let lo = lo.map(|x| x >> 3);
+        let d = [0, 1, 2].map(|a| (hi[a] >> 3) - lo[a] + 1);
+        if (d[0] as i64) * (d[1] as i64) * (d[2] as i64) <= dense_limit {
+            let mut id = vec![u32::MAX; (d[0] * d[1] * d[2]) as usize];
+            for (n, b) in blocks.iter().enumerate() {
+                let q = [0, 1, 2].map(|a| (b[a] >> 3) - lo[a]);
+                id[((q[0] * d[1] + q[1]) * d[2] + q[2]) as usize] = n as u32;
+            }
+            BlockIds::Dense { lo, d, id }
+        } else {
+            BlockIds::Sparse(
+                blocks
+                    .iter()
+                    .enumerate()
+                    .map(|(n, &b)| (b, n as u32))
+                    .collect(),
+            )
+        }
+    }
+    /// Index of the block with block coordinates `q` (origin / 8).
+    #[inline]
+    fn get(&self, q: [i32; 3]) -> Option<u32> {
+        match self {
+            BlockIds::Dense { lo, d, id } => {
+                let r = [q[0] - lo[0], q[1] - lo[1], q[2] - lo[2]];
+                if (0..3).any(|a| r[a] < 0 || r[a] >= d[a]) {
+                    return None;
+                }
+                let v = id[((r[0] * d[1] + r[1]) * d[2] + r[2]) as usize];
+                (v != u32::MAX).then_some(v)
+            }
+            BlockIds::Sparse(m) => m.get(&q.map(|x| x * LEAF_DIM)).copied(),
+        }
+    }
+}
+
+/// Sums the kernels (with particle velocities `vel`, indexed by `k.index`) on the grid of voxel
+/// size `h`, in the *band blocks* only: blocks within `reach` (m) of a particle that is not deep
+/// (or within its kernel box and two voxels). Blocks that only deep kernels touch are recorded as
+/// interior (their voxels are ≥ ~0.6 r − kernel radius inside the liquid: f ≥ 1 − lattice noise).
+pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityField {
     let inv = 1.0 / h;
-    // (block, particle) pairs
-    let mut pairs: Vec<(Key, u32)> = (0..k.center.len())
+    let nk = k.center.len();
+    let band = union_of_boxes(
+        (0..nk)
+            .into_par_iter()
+            .filter(|&i| !k.deep[i])
+            .map(|i| {
+                let e = k.extent_of(i).add_scalar(2.0 * h).sup(&Vec3::repeat(reach));
+                block_box(k.center_of(i), e, inv)
+            })
+            .collect(),
+    );
+    let ids = BlockIds::new(&band);
+    let mut interior = union_of_boxes(
+        (0..nk)
+            .into_par_iter()
+            .filter(|&i| k.deep[i])
+            .map(|i| block_box(k.center_of(i), k.extent_of(i), inv))
+            .collect(),
+    );
+    interior.retain(|b| ids.get(b.map(|x| x >> 3)).is_none());
+    // (band block, kernel) pairs, in kernel order, then grouped by block (counting sort: each
+    // block's kernels stay in kernel order)
+    let pairs: Vec<(u32, u32)> = (0..nk)
         .into_par_iter()
         .flat_map_iter(|i| {
-            let c = k.center[i];
-            let e = k.extent[i];
-            let lo = leaf_origin(((c - e) * inv).map(|x| x.ceil() as i32).into());
-            let hi = leaf_origin(((c + e) * inv).map(|x| x.floor() as i32).into());
-            // lazily, without a vector per particle
-            let step = LEAF_DIM as usize;
-            (lo[0]..=hi[0]).step_by(step).flat_map(move |x| {
-                (lo[1]..=hi[1]).step_by(step).flat_map(move |y| {
-                    (lo[2]..=hi[2])
-                        .step_by(step)
-                        .map(move |z| ([x, y, z], i as u32))
+            let (a, b) = block_box(k.center_of(i), k.extent_of(i), inv);
+            let ids = &ids;
+            (a[0]..=b[0]).flat_map(move |x| {
+                (a[1]..=b[1]).flat_map(move |y| {
+                    (a[2]..=b[2]).filter_map(move |z| ids.get([x, y, z]).map(|id| (id, i as u32)))
                 })
             })
         })
         .collect();
-    pairs.par_sort_unstable();
-    let mut groups: Vec<(usize, usize)> = Vec::new();
-    let mut s = 0;
-    while s < pairs.len() {
-        let mut e = s + 1;
-        while e < pairs.len() && pairs[e].0 == pairs[s].0 {
-            e += 1;
-        }
-        groups.push((s, e));
-        s = e;
+    drop(ids);
+    let mut start = vec![0usize; band.len() + 1];
+    for &(b, _) in &pairs {
+        start[b as usize + 1] += 1;
     }
+    for b in 0..band.len() {
+        start[b + 1] += start[b];
+    }
+    let mut fill = start.clone();
+    let mut list = vec![0u32; pairs.len()];
+    for &(b, i) in &pairs {
+        list[fill[b as usize]] = i;
+        fill[b as usize] += 1;
+    }
+    drop((pairs, fill));
+    let groups: Vec<(Key, usize, usize)> = (0..band.len())
+        .filter(|&b| start[b + 1] > start[b])
+        .map(|b| (band[b], start[b], start[b + 1]))
+        .collect();
     let blocks: Vec<DensityBlock> = groups
         .par_iter()
-        .map(|&(s, e)| {
-            let origin = pairs[s].0;
+        .map(|&(origin, s, e)| {
             let mut f = [0f64; LEAF_SIZE];
             let mut m = [[0f64; 3]; LEAF_SIZE];
-            for &(_, pi) in &pairs[s..e] {
+            let ob = Vec3::new(origin[0] as Real, origin[1] as Real, origin[2] as Real);
+            for &pi in &list[s..e] {
                 let i = pi as usize;
-                let c = k.center[i];
-                let ex = k.extent[i];
-                let g = k.g[i];
-                let amp = k.amp[i];
+                let ex = k.extent_of(i) * inv;
+                // centre in voxel units relative to the block; G in voxel units (q = Gv (x − c))
+                let c = k.center_of(i) * inv - ob;
+                let gs = k.g[i];
+                let amp = k.amp[i] as Real;
                 let v = vel[k.index[i] as usize];
-                let lo = ((c - ex) * inv).map(|x| x.ceil() as i32);
-                let hi = ((c + ex) * inv).map(|x| x.floor() as i32);
-                for x in lo.x.max(origin[0])..=hi.x.min(origin[0] + 7) {
-                    for y in lo.y.max(origin[1])..=hi.y.min(origin[1] + 7) {
-                        let base = Vec3::new(x as Real * h - c.x, y as Real * h - c.y, -c.z);
-                        let gb = g * base;
-                        let gz = g.column(2) * h;
-                        // |gb + z gz|² < 1 is a quadratic in z: visit only its interval
-                        let (qa, qb, qc) = (gz.norm_squared(), gb.dot(&gz), gb.norm_squared());
+                let lo = (c - ex).map(|x| (x.ceil() as i32).max(0));
+                let hi = (c + ex).map(|x| (x.floor() as i32).min(LEAF_DIM - 1));
+                let mut add = |x: i32, y: i32, z: i32, s2: Real| {
+                    if s2 < 1.0 {
+                        let t = 1.0 - s2;
+                        let w = amp * t * t * t;
+                        let n = ((x << 6) | (y << 3) | z) as usize;
+                        f[n] += w;
+                        m[n][0] += w * v.x;
+                        m[n][1] += w * v.y;
+                        m[n][2] += w * v.z;
+                    }
+                };
+                if gs[1] == 0.0 && gs[2] == 0.0 && gs[4] == 0.0 && gs[0] == gs[3] && gs[0] == gs[5]
+                {
+                    // isotropic: |q|² = s² |x − c|², z-interval from the radius
+                    let sc = gs[0] as Real * h;
+                    let (s2, r2) = (sc * sc, 1.0 / (sc * sc));
+                    for x in lo.x..=hi.x {
+                        let dx = x as Real - c.x;
+                        for y in lo.y..=hi.y {
+                            let dy = y as Real - c.y;
+                            let rxy = dx * dx + dy * dy;
+                            if rxy >= r2 {
+                                continue;
+                            }
+                            let zr = (r2 - rxy).sqrt();
+                            let z0 = ((c.z - zr).ceil() as i32).max(lo.z);
+                            let z1 = ((c.z + zr).floor() as i32).min(hi.z);
+                            for z in z0..=z1 {
+                                let dz = z as Real - c.z;
+                                add(x, y, z, s2 * (rxy + dz * dz));
+                            }
+                        }
+                    }
+                    continue;
+                }
+                let g = k.g_of(i) * h;
+                let (gx, gy, gz) = (
+                    g.column(0).into_owned(),
+                    g.column(1).into_owned(),
+                    g.column(2).into_owned(),
+                );
+                // |u + z gz|² < 1 is a quadratic in z: visit only its interval
+                let qa = gz.norm_squared();
+                if qa <= 0.0 {
+                    continue;
+                }
+                let u0 = -(g * c);
+                for x in lo.x..=hi.x {
+                    let ux = u0 + gx * x as Real;
+                    for y in lo.y..=hi.y {
+                        let u = ux + gy * y as Real;
+                        let (qb, qc) = (u.dot(&gz), u.norm_squared());
                         let disc = qb * qb - qa * (qc - 1.0);
-                        if disc <= 0.0 || qa <= 0.0 {
+                        if disc <= 0.0 {
                             continue;
                         }
                         let sd = disc.sqrt();
-                        let z0 = ((-qb - sd) / qa).ceil() as i32;
-                        let z1 = ((-qb + sd) / qa).floor() as i32;
-                        for z in z0.max(lo.z).max(origin[2])..=z1.min(hi.z).min(origin[2] + 7) {
-                            let q = gb + gz * z as Real;
-                            let s2 = q.norm_squared();
-                            if s2 < 1.0 {
-                                let t = 1.0 - s2;
-                                let w = amp * t * t * t;
-                                let n = voxel_index([x, y, z]);
-                                f[n] += w;
-                                m[n][0] += w * v.x;
-                                m[n][1] += w * v.y;
-                                m[n][2] += w * v.z;
-                            }
+                        let z0 = (((-qb - sd) / qa).ceil() as i32).max(lo.z);
+                        let z1 = (((-qb + sd) / qa).floor() as i32).min(hi.z);
+                        for z in z0..=z1 {
+                            let q = u + gz * z as Real;
+                            add(x, y, z, q.norm_squared());
                         }
                     }
                 }
             }
             let mut fo = [0f32; LEAF_SIZE];
             let mut vo = [[0f32; 3]; LEAF_SIZE];
+            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
             for n in 0..LEAF_SIZE {
                 fo[n] = f[n] as f32;
                 if f[n] > 0.0 {
-                    vo[n] = [
-                        (m[n][0] / f[n]) as f32,
-                        (m[n][1] / f[n]) as f32,
-                        (m[n][2] / f[n]) as f32,
-                    ];
+                    for a in 0..3 {
+                        let v = (m[n][a] / f[n]) as f32;
+                        vo[n][a] = v;
+                        lo[a] = lo[a].min(v);
+                        hi[a] = hi[a].max(v);
+                    }
+                }
+            }
+            let mut vmin = [0f32; 3];
+            let mut vstep = [0f32; 3];
+            for a in 0..3 {
+                if lo[a] < hi[a] {
+                    vmin[a] = lo[a];
+                    vstep[a] = (hi[a] - lo[a]) / 65535.0;
+                } else if lo[a] == hi[a] {
+                    vmin[a] = lo[a];
+                }
+            }
+            let mut vq = [[0u16; 3]; LEAF_SIZE];
+            for n in 0..LEAF_SIZE {
+                if f[n] > 0.0 {
+                    for a in 0..3 {
+                        if vstep[a] > 0.0 {
+                            vq[n][a] = ((vo[n][a] - vmin[a]) / vstep[a])
+                                .round()
+                                .clamp(0.0, 65535.0) as u16;
+                        }
+                    }
                 }
             }
             DensityBlock {
                 origin,
                 f: fo,
-                vel: vo,
+                vq,
+                vmin,
+                vstep,
             }
         })
         .collect();
@@ -164,6 +408,7 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
         voxel: h,
         blocks,
         index,
+        interior,
     }
 }
 
@@ -173,7 +418,10 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real) -> DensityField {
 pub struct SignField {
     /// block origins and their inside masks (bit n of word n/64)
     pub blocks: Vec<(Key, [u64; 8])>,
+    /// origins of interior blocks (all inside), sorted
+    pub interior: Vec<Key>,
     index: FxMap<Key, usize>,
+    interior_index: FxMap<Key, ()>,
 }
 
 impl SignField {
@@ -193,17 +441,75 @@ impl SignField {
             })
             .collect();
         let index = blocks.iter().enumerate().map(|(i, b)| (b.0, i)).collect();
-        SignField { blocks, index }
+        let interior = d.interior.clone();
+        let interior_index = interior.iter().map(|&k| (k, ())).collect();
+        SignField {
+            blocks,
+            interior,
+            index,
+            interior_index,
+        }
     }
-    /// Is voxel `ijk` inside (outside every block: no)?
+    /// Inside mask (bit n of word n/64) of the leaf at `origin`.
+    pub fn mask(&self, origin: Key) -> [u64; 8] {
+        match self.index.get(&origin) {
+            Some(&b) => self.blocks[b].1,
+            None if self.interior_index.contains_key(&origin) => [u64::MAX; 8],
+            None => [0; 8],
+        }
+    }
+
+    /// Is voxel `ijk` inside (interior blocks: yes; outside every block: no)?
     #[inline]
     pub fn inside(&self, ijk: Key) -> bool {
-        match self.index.get(&leaf_origin(ijk)) {
+        let o = leaf_origin(ijk);
+        match self.index.get(&o) {
             Some(&b) => {
                 let n = voxel_index(ijk);
                 self.blocks[b].1[n >> 6] >> (n & 63) & 1 == 1
             }
-            None => false,
+            None => self.interior_index.contains_key(&o),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dense_and_hashed_block_sets_agree() {
+        let boxes = vec![
+            ([0, 0, 0], [2, 1, 3]),
+            ([-3, 1, 2], [-1, 1, 2]),
+            ([1, 1, 1], [4, 2, 2]),
+            ([40, -7, 9], [41, -7, 10]),
+        ];
+        let mut brute: Vec<Key> = Vec::new();
+        for (a, b) in &boxes {
+            for x in a[0]..=b[0] {
+                for y in a[1]..=b[1] {
+                    for z in a[2]..=b[2] {
+                        brute.push([x * 8, y * 8, z * 8]);
+                    }
+                }
+            }
+        }
+        brute.sort_unstable();
+        brute.dedup();
+        let dense = union_of_boxes_with(boxes.clone(), i64::MAX);
+        let hashed = union_of_boxes_with(boxes, 0);
+        assert_eq!(dense, brute);
+        assert_eq!(hashed, brute);
+        for ids in [
+            BlockIds::new_with(&brute, i64::MAX),
+            BlockIds::new_with(&brute, 0),
+        ] {
+            for (n, b) in brute.iter().enumerate() {
+                assert_eq!(ids.get(b.map(|x| x >> 3)), Some(n as u32));
+            }
+            assert_eq!(ids.get([5, 5, 5]), None);
+            assert_eq!(ids.get([100, 0, 0]), None);
         }
     }
 }

@@ -2,6 +2,7 @@
 //! integer keys (std's SipHash is needlessly slow for voxel keys) and a cell grid for
 //! fixed-radius neighbour queries with deterministic (index-sorted) cell contents.
 use crate::{Real, Vec3};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -67,6 +68,28 @@ impl CellGrid {
         &self.order
     }
 
+    /// Positions in cell order.
+    pub fn sorted(&self) -> &[Vec3] {
+        &self.sorted
+    }
+
+    /// Range in [`Self::order`] of the points of cell `key` (if occupied).
+    #[inline]
+    pub fn cell_range(&self, key: Key) -> Option<(u32, u32)> {
+        self.cells.get(&key).copied()
+    }
+
+    /// Cell of a point.
+    #[inline]
+    pub fn cell_key(&self, p: &Vec3) -> Key {
+        cell_of(p, self.inv_h)
+    }
+
+    /// Cell size.
+    pub fn cell_size(&self) -> Real {
+        1.0 / self.inv_h
+    }
+
     /// Bins `points` into cells of size `h`.
     pub fn build(points: &[Vec3], h: Real) -> CellGrid {
         let inv_h = 1.0 / h;
@@ -75,7 +98,7 @@ impl CellGrid {
             .enumerate()
             .map(|(i, p)| (cell_of(p, inv_h), i as u32))
             .collect();
-        keyed.sort_unstable();
+        keyed.par_sort_unstable();
         let mut cells = FxMap::default();
         let mut s = 0;
         while s < keyed.len() {

@@ -44,10 +44,28 @@ pub struct Leaf {
     pub origin: Key,
     /// signed distance (m), clamped to ±background; inside negative
     pub phi: Box<[f32; LEAF_SIZE]>,
-    /// velocity (m/s)
-    pub vel: Box<[[f32; 3]; LEAF_SIZE]>,
+    /// velocity (m/s) of the active voxels, in voxel order (inactive voxels have none: 0 in the
+    /// `v` grid)
+    pub vel: Vec<[f32; 3]>,
     /// active voxels (|φ| < background), bit n of word n/64
     pub active: [u64; 8],
+}
+
+impl Leaf {
+    /// Velocity of voxel `n` if it is active.
+    #[inline]
+    pub fn vel_at(&self, n: usize) -> Option<[f32; 3]> {
+        let (w, b) = (n >> 6, n & 63);
+        if self.active[w] >> b & 1 == 0 {
+            return None;
+        }
+        let rank = self.active[..w]
+            .iter()
+            .map(|x| x.count_ones() as usize)
+            .sum::<usize>()
+            + (self.active[w] & ((1u64 << b) - 1)).count_ones() as usize;
+        self.vel.get(rank).copied()
+    }
 }
 
 /// A finished sparse level set with voxel centres at `ijk · voxel`.
@@ -104,10 +122,10 @@ impl LevelSet {
     /// Velocity at voxel `ijk` (zero away from the band).
     pub fn velocity(&self, ijk: Key) -> Vec3 {
         match self.leaf(leaf_origin(ijk)) {
-            Some(l) => {
-                let v = l.vel[voxel_index(ijk)];
-                Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real)
-            }
+            Some(l) => match l.vel_at(voxel_index(ijk)) {
+                Some(v) => Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real),
+                None => Vec3::zeros(),
+            },
             None => Vec3::zeros(),
         }
     }
@@ -144,7 +162,11 @@ impl LevelSet {
 
     /// Bytes held by the leaves and tiles.
     pub fn memory_bytes(&self) -> usize {
-        self.leaves.len() * (std::mem::size_of::<Leaf>() + LEAF_SIZE * 16) + self.inside.len() * 24
+        self.leaves
+            .iter()
+            .map(|l| std::mem::size_of::<Leaf>() + LEAF_SIZE * 4 + l.vel.len() * 12)
+            .sum::<usize>()
+            + self.inside.len() * 24
     }
 }
 
@@ -224,34 +246,36 @@ impl Prim {
     }
 }
 
-/// A leaf under construction.
+/// A leaf under construction (boxed, so that [`WorkGrid::finish`] frees each as it is converted).
 #[derive(Clone)]
 pub struct WorkLeaf {
     /// origin
     pub origin: Key,
     /// φ (m)
     pub phi: [f32; LEAF_SIZE],
-    /// velocity
-    pub vel: [[f32; 3]; LEAF_SIZE],
-    /// closest surface point of each set voxel (m)
-    pub cp: [[f32; 3]; LEAF_SIZE],
+    /// closest surface point of each set voxel, as an offset from the voxel in units of
+    /// [`crate::redistance::CP_UNIT`] voxels
+    pub cp: [[i16; 3]; LEAF_SIZE],
+    /// velocity source of each set voxel: index into [`WorkGrid::sources`]
+    pub src: [u32; LEAF_SIZE],
     /// voxels whose φ has been computed
     pub set: [u64; 8],
 }
 
 impl WorkLeaf {
-    /// A leaf whose voxels hold ±background by `inside(ijk)`.
-    pub fn new(origin: Key, bg: f32, inside: impl Fn(Key) -> bool) -> Self {
-        let mut l = WorkLeaf {
+    /// A leaf whose voxels hold −background where `inside` (bit n of word n/64) and +background
+    /// elsewhere.
+    pub fn new(origin: Key, bg: f32, inside: [u64; 8]) -> Box<Self> {
+        let mut l = Box::new(WorkLeaf {
             origin,
             phi: [bg; LEAF_SIZE],
-            vel: [[0.0; 3]; LEAF_SIZE],
-            cp: [[0.0; 3]; LEAF_SIZE],
+            cp: [[0; 3]; LEAF_SIZE],
+            src: [u32::MAX; LEAF_SIZE],
             set: [0; 8],
-        };
-        for n in 0..LEAF_SIZE {
-            if inside(voxel_of(origin, n)) {
-                l.phi[n] = -bg;
+        });
+        for (n, v) in l.phi.iter_mut().enumerate() {
+            if inside[n >> 6] >> (n & 63) & 1 == 1 {
+                *v = -bg;
             }
         }
         l
@@ -270,9 +294,11 @@ pub struct WorkGrid {
     /// background (m)
     pub bg: f32,
     /// leaves
-    pub leaves: Vec<WorkLeaf>,
+    pub leaves: Vec<Box<WorkLeaf>>,
     /// origin → index into `leaves`
     pub index: FxMap<Key, usize>,
+    /// velocities of the surface points (seeds, then primitives) that voxels take theirs from
+    pub sources: Vec<[f32; 3]>,
 }
 
 impl WorkGrid {
@@ -283,6 +309,7 @@ impl WorkGrid {
             bg,
             leaves: Vec::new(),
             index: FxMap::default(),
+            sources: Vec::new(),
         }
     }
 
@@ -292,12 +319,13 @@ impl WorkGrid {
         Vec3::new(ijk[0] as Real, ijk[1] as Real, ijk[2] as Real) * self.voxel
     }
 
-    /// Index of the leaf at `origin`, creating it with signs from `inside`.
-    pub fn ensure(&mut self, origin: Key, inside: &(impl Fn(Key) -> bool + Sync)) -> usize {
+    /// Index of the leaf at `origin`, creating it with the inside mask `inside(origin)`.
+    pub fn ensure(&mut self, origin: Key, inside: &(impl Fn(Key) -> [u64; 8] + Sync)) -> usize {
         if let Some(&i) = self.index.get(&origin) {
             return i;
         }
-        self.leaves.push(WorkLeaf::new(origin, self.bg, inside));
+        self.leaves
+            .push(WorkLeaf::new(origin, self.bg, inside(origin)));
         self.index.insert(origin, self.leaves.len() - 1);
         self.leaves.len() - 1
     }
@@ -305,7 +333,11 @@ impl WorkGrid {
     /// Unions primitives (with their velocities) into the grid: φ = min(φ, sdf), velocity taken
     /// from the primitive wherever it is the closest surface. Primitives are applied in index
     /// order within each leaf, so the result does not depend on the thread count.
-    pub fn union_prims(&mut self, prims: &[(Prim, Vec3)], inside: &(impl Fn(Key) -> bool + Sync)) {
+    pub fn union_prims(
+        &mut self,
+        prims: &[(Prim, Vec3)],
+        inside: &(impl Fn(Key) -> [u64; 8] + Sync),
+    ) {
         let h = self.voxel;
         let margin = self.bg as Real + h;
         let mut pairs: Vec<(Key, u32)> = Vec::new();
@@ -343,12 +375,18 @@ impl WorkGrid {
             lists[li].push(pi);
         }
         let bg = self.bg;
+        let base = self.sources.len() as u32;
+        self.sources.extend(
+            prims
+                .iter()
+                .map(|(_, v)| [v.x as f32, v.y as f32, v.z as f32]),
+        );
         self.leaves
             .par_iter_mut()
             .zip(lists.par_iter())
             .for_each(|(leaf, list)| {
                 for &pi in list {
-                    let (prim, v) = &prims[pi as usize];
+                    let (prim, _) = &prims[pi as usize];
                     let (lo, hi) = boxes[pi as usize];
                     let o = leaf.origin;
                     for x in lo.x.max(o[0])..=hi.x.min(o[0] + 7) {
@@ -359,7 +397,7 @@ impl WorkGrid {
                                 let n = voxel_index([x, y, z]);
                                 if d < leaf.phi[n] {
                                     leaf.phi[n] = d;
-                                    leaf.vel[n] = [v.x as f32, v.y as f32, v.z as f32];
+                                    leaf.src[n] = base + pi;
                                     leaf.set[n >> 6] |= 1 << (n & 63);
                                 }
                             }
@@ -374,6 +412,7 @@ impl WorkGrid {
     pub fn finish(self, extra_inside: Vec<Key>) -> LevelSet {
         let bg = self.bg;
         let present: FxMap<Key, ()> = self.leaves.iter().map(|l| (l.origin, ())).collect();
+        let sources = &self.sources;
         let done: Vec<(Option<Leaf>, Option<Key>)> = self
             .leaves
             .into_par_iter()
@@ -397,7 +436,17 @@ impl WorkGrid {
                 if active.iter().all(|&a| a == 0) {
                     return (None, (neg * 2 > LEAF_SIZE).then_some(w.origin));
                 }
-                let vel = Box::new(w.vel);
+                let mut vel = Vec::with_capacity(
+                    active
+                        .iter()
+                        .map(|a| a.count_ones() as usize)
+                        .sum::<usize>(),
+                );
+                for n in 0..LEAF_SIZE {
+                    if active[n >> 6] >> (n & 63) & 1 == 1 {
+                        vel.push(sources.get(w.src[n] as usize).copied().unwrap_or([0.0; 3]));
+                    }
+                }
                 (
                     Some(Leaf {
                         origin: w.origin,

@@ -5,7 +5,7 @@ use crate::anisotropy::{build_kernels, AnisoParams};
 use crate::cache::{frame_path, list_frames, read_frame, ParticleFrame};
 use crate::filaments::{chain_filaments, tube_prims, tubes_mesh, FilamentParams};
 use crate::levelset::{LevelSet, WorkGrid};
-use crate::mesh::{marching_tets, TriMesh};
+use crate::mesh::{marching_cubes, TriMesh};
 use crate::redistance::{redistance, RedistanceInfo};
 use crate::sheets::{disks_mesh, sheet_disks, SheetParams};
 use crate::{Real, SurfaceError, Vec3};
@@ -32,6 +32,9 @@ pub struct SurfaceOptions {
     pub filaments: FilamentParams,
     /// frames surfaced at the same time (≥ 1); each uses all threads inside as well
     pub parallel_frames: usize,
+    /// passes of the [1 2 1]/4 band filter on the volume level set (see
+    /// [`crate::redistance::smooth_band`]; 0 = none)
+    pub smooth_iterations: usize,
     /// shift the volume level set so it encloses the particles' volume (see
     /// [`crate::redistance::conserve_volume`])
     pub conserve_volume: bool,
@@ -48,6 +51,7 @@ impl Default for SurfaceOptions {
             sheets: SheetParams::default(),
             filaments: FilamentParams::default(),
             parallel_frames: 2,
+            smooth_iterations: 1,
             conserve_volume: true,
         }
     }
@@ -117,8 +121,12 @@ pub struct FrameStats {
     pub voxel: Real,
     /// volume particles that kept isotropic kernels
     pub isotropic_kernels: usize,
-    /// density blocks
+    /// volume particles with a full, symmetric neighbourhood (isotropic fast path)
+    pub deep_kernels: usize,
+    /// density blocks evaluated (the band blocks)
     pub density_blocks: usize,
+    /// blocks only deep kernels reach (interior, not evaluated)
+    pub interior_blocks: usize,
     /// redistancing counts
     pub redistance: RedistanceInfo,
     /// shift applied by volume conservation (m, positive = surface moved outward)
@@ -186,29 +194,38 @@ pub fn surface_particles(
     let t = Instant::now();
     let vi = frame.indices_of(0);
     let vpos: Vec<Vec3> = vi.iter().map(|&i| frame.pos[i]).collect();
-    let vvel: Vec<Vec3> = vi.iter().map(|&i| frame.vel[i]).collect();
     let vvol: Vec<Real> = vi
         .iter()
         .map(|&i| 4.0 / 3.0 * std::f64::consts::PI * frame.pscale[i].powi(3))
         .collect();
-    let kernels = build_kernels(&vpos, &vvol, dx, &o.aniso);
+    let mut kernels = build_kernels(&vpos, &vvol, dx, &o.aniso);
+    // kernel → frame index (velocities are read from the frame)
+    kernels
+        .index
+        .par_iter_mut()
+        .for_each(|i| *i = vi[*i as usize] as u32);
     drop(vpos);
     let target: Real = vvol.iter().sum();
     drop(vvol);
     st.isotropic_kernels = kernels.isotropic;
+    st.deep_kernels = kernels.deep.iter().filter(|&&d| d).count();
     st.seconds[0] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let dens = crate::density::rasterize(&kernels, &vvel, h);
-    drop(vvel);
+    let reach = o.aniso.radius_rel * dx + 2.0 * h;
+    let dens = crate::density::rasterize(&kernels, &frame.vel, h, reach);
     drop(kernels);
     st.density_blocks = dens.blocks.len();
+    st.interior_blocks = dens.interior.len();
     let dens_bytes = dens.memory_bytes();
     st.seconds[1] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let (mut grid, extra_inside, signs, info): (WorkGrid, _, _, _) = redistance(dens, iso, band);
     st.redistance = info;
+    if o.smooth_iterations > 0 && !vi.is_empty() {
+        crate::redistance::smooth_band(&mut grid, &|k| signs.inside(k), o.smooth_iterations);
+    }
     if o.conserve_volume && !vi.is_empty() {
         st.volume_shift = crate::redistance::conserve_volume(&mut grid, &signs, target, band);
     }
@@ -221,8 +238,7 @@ pub fn surface_particles(
     let tubes = tube_prims(frame, &chains, h, &o.filaments);
     let mut prims = disks.clone();
     prims.extend_from_slice(&tubes);
-    let inside = |ijk| signs.inside(ijk);
-    grid.union_prims(&prims, &inside);
+    grid.union_prims(&prims, &|o| signs.mask(o));
     st.grid_bytes =
         dens_bytes + grid.leaves.len() * std::mem::size_of::<crate::levelset::WorkLeaf>();
     drop(signs);
@@ -232,7 +248,7 @@ pub fn surface_particles(
     st.seconds[3] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let mesh = marching_tets(&ls);
+    let mesh = marching_cubes(&ls);
     st.triangles = mesh.tris.len();
     let sheets = disks_mesh(&disks, o.sheets.segments);
     let filaments = tubes_mesh(frame, &chains, &tubes, h, &o.filaments);

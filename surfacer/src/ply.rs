@@ -31,10 +31,10 @@ pub fn write_atomically(
     std::fs::rename(&tmp, path).map_err(|e| SurfaceError::io(path, e))
 }
 
-/// One row of the mesh PLY: a vertex (9 floats) or a face (3 indices).
+/// One vertex row of the mesh PLY (the writer's element type; only its header writer is used,
+/// the body is written directly).
 enum Row {
     V([f32; 9]),
-    F([i32; 3]),
 }
 
 const VNAMES: [&str; 9] = ["x", "y", "z", "nx", "ny", "nz", "vx", "vy", "vz"];
@@ -46,13 +46,6 @@ impl PropertyAccess for Row {
     fn get_float(&self, name: &str) -> Option<f32> {
         match self {
             Row::V(v) => VNAMES.iter().position(|n| *n == name).map(|i| v[i]),
-            Row::F(_) => None,
-        }
-    }
-    fn get_list_int(&self, name: &str) -> Option<&[i32]> {
-        match self {
-            Row::F(f) if name == "vertex_indices" => Some(&f[..]),
-            _ => None,
         }
     }
 }
@@ -81,18 +74,29 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh, comment: &str) -> Result<(), Surf
     write_atomically(path, |w| {
         let wr = Writer::<Row>::new();
         wr.write_header(w, &header)?;
+        // the body as the header declares it (binary little endian), written directly: vertices
+        // as 9 f32, faces as a u8 count 3 and 3 i32
+        let mut buf = Vec::with_capacity(1 << 16);
         for i in 0..mesh.pos.len() {
             let (p, n, v) = (mesh.pos[i], mesh.normal[i], mesh.vel[i]);
-            let row = Row::V([
-                p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32, v.x as f32,
-                v.y as f32, v.z as f32,
-            ]);
-            wr.write_little_endian_element(w, &row, &ve)?;
+            for x in [p.x, p.y, p.z, n.x, n.y, n.z, v.x, v.y, v.z] {
+                buf.extend_from_slice(&(x as f32).to_le_bytes());
+            }
+            if buf.len() >= 1 << 16 {
+                w.write_all(&buf)?;
+                buf.clear();
+            }
         }
         for t in &mesh.tris {
-            let row = Row::F([t[0] as i32, t[1] as i32, t[2] as i32]);
-            wr.write_little_endian_element(w, &row, &fe)?;
+            buf.push(3);
+            for &k in t {
+                buf.extend_from_slice(&(k as i32).to_le_bytes());
+            }
+            if buf.len() >= 1 << 16 {
+                w.write_all(&buf)?;
+                buf.clear();
+            }
         }
-        Ok(())
+        w.write_all(&buf)
     })
 }

@@ -14,7 +14,7 @@
 //! The sign of every voxel comes from f itself, so inside never depends on the propagation.
 use crate::density::{DensityField, SignField};
 use crate::hash::Key;
-use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, LEAF_SIZE};
+use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, WorkLeaf, LEAF_SIZE};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -29,9 +29,14 @@ pub struct RedistanceInfo {
     pub propagated: usize,
 }
 
-type Entry = (Key, f32, [f32; 3], [f32; 3]);
-/// A propagated voxel: (index in leaf, φ, closest point, velocity).
-type Update = (usize, f32, [f32; 3], [f32; 3]);
+/// A seed: (voxel, φ, closest point as an offset (see [`CP_UNIT`]), velocity).
+type Entry = (Key, f32, [i16; 3], [f32; 3]);
+/// A propagated voxel: (index in leaf, φ, closest-point offset, velocity source).
+type Update = (usize, f32, [i16; 3], u32);
+
+/// Closest points are stored as offsets from their voxel in units of 1/4096 voxel (range ±8
+/// voxels; propagation keeps them within band + 1): exact integer shifts from voxel to voxel.
+pub const CP_UNIT: Real = 1.0 / 4096.0;
 
 /// Builds the band of half width `band`·Δx around f = `iso`. The field is consumed once the seeds
 /// are taken (only its signs are kept). Returns the grid, the origins of density blocks entirely
@@ -43,13 +48,43 @@ pub fn redistance(
 ) -> (WorkGrid, Vec<Key>, SignField, RedistanceInfo) {
     let h = d.voxel;
     let bg = (band * h) as f32;
-    let world = |k: Key| Vec3::new(k[0] as Real, k[1] as Real, k[2] as Real) * h;
     let mut info = RedistanceInfo::default();
 
-    let seeds: Vec<(Entry, bool)> = d
+    // blocks entirely on one side of the iso-value (1 inside, 2 outside, 0 mixed)
+    let side: Vec<u8> = d
         .blocks
         .par_iter()
-        .flat_map_iter(|b| {
+        .map(|b| {
+            let n_in = b.f.iter().filter(|&&f| f >= iso).count();
+            match n_in {
+                LEAF_SIZE => 1,
+                0 => 2,
+                _ => 0,
+            }
+        })
+        .collect();
+    // a uniform block whose six face neighbours are uniform on the same side has no seeds
+    let no_seeds = |bi: usize| {
+        let sd = side[bi];
+        let o = d.blocks[bi].origin;
+        sd != 0
+            && (0..6).all(|f| {
+                let mut q = o;
+                q[f / 2] += if f % 2 == 0 { -8 } else { 8 };
+                match d.index.get(&q) {
+                    Some(&j) => side[j] == sd,
+                    None if d.interior.binary_search(&q).is_ok() => sd == 1,
+                    None => sd == 2,
+                }
+            })
+    };
+    // seeds per block (each list sized exactly: no doubling of one large vector)
+    let seeds: Vec<Vec<(Entry, bool)>> = d
+        .blocks
+        .par_iter()
+        .enumerate()
+        .filter(|(bi, _)| !no_seeds(*bi))
+        .map(|(_, b)| {
             let mut out = Vec::new();
             for n in 0..LEAF_SIZE {
                 let ijk = voxel_of(b.origin, n);
@@ -57,7 +92,7 @@ pub fn redistance(
                 let ins = f >= iso;
                 let mut inv2 = 0.0f64;
                 let mut grad = Vec3::zeros();
-                let mut vel = b.vel[n];
+                let mut vel = b.vel(n);
                 let mut any = false;
                 for a in 0..3 {
                     let mut dmin = Real::INFINITY;
@@ -93,45 +128,59 @@ pub fn redistance(
                 let phi = (1.0 / inv2.sqrt()) * if ins { -1.0 } else { 1.0 };
                 let gn = grad.norm();
                 let flat = gn.is_nan() || gn <= 0.0;
-                let cp = if flat {
-                    world(ijk)
+                // closest point x + φ ∇f/|∇f|, as an offset in voxels
+                let off = if flat {
+                    Vec3::zeros()
                 } else {
-                    world(ijk) + phi * grad / gn
+                    phi * grad / (gn * h)
                 };
-                out.push((
-                    (
-                        ijk,
-                        phi as f32,
-                        [cp.x as f32, cp.y as f32, cp.z as f32],
-                        vel,
-                    ),
-                    flat,
-                ));
+                let q = |v: Real| (v / CP_UNIT).round().clamp(-32767.0, 32767.0) as i16;
+                out.push(((ijk, phi as f32, [q(off.x), q(off.y), q(off.z)], vel), flat));
             }
+            out.shrink_to_fit();
             out
         })
+        .filter(|v| !v.is_empty())
         .collect();
-    info.seeds = seeds.len();
+    info.seeds = seeds.iter().map(|v| v.len()).sum();
     let signs = SignField::new(&d, iso);
     drop(d);
     let inside = |ijk: Key| signs.inside(ijk);
-    info.flat_gradient = seeds.iter().filter(|s| s.1).count();
+    let mask = |o: Key| signs.mask(o);
+    info.flat_gradient = seeds.iter().flatten().filter(|s| s.1).count();
 
     let mut grid = WorkGrid::new(h, bg);
-    // `front[li]`: voxels of leaf li set in the previous layer
-    let mut front: Vec<[u64; 8]> = Vec::new();
-    for (e, _) in &seeds {
-        let li = grid.ensure(leaf_origin(e.0), &inside);
-        if li >= front.len() {
-            front.resize(li + 1, [0; 8]);
-        }
-        let l = &mut grid.leaves[li];
-        let n = voxel_index(e.0);
-        l.phi[n] = e.1;
-        l.cp[n] = e.2;
-        l.vel[n] = e.3;
-        l.set[n >> 6] |= 1 << (n & 63);
-        front[li][n >> 6] |= 1 << (n & 63);
+    // one leaf per block with seeds, built in parallel; seed k (in block order) is velocity
+    // source k. `front[li]`: voxels of leaf li set in the previous layer
+    let mut base = Vec::with_capacity(seeds.len());
+    let mut total = 0usize;
+    for v in &seeds {
+        base.push(total);
+        total += v.len();
+    }
+    let built: Vec<(Box<WorkLeaf>, [u64; 8])> = seeds
+        .par_iter()
+        .zip(base.par_iter())
+        .map(|(list, &a)| {
+            let origin = leaf_origin(list[0].0 .0);
+            let mut l = WorkLeaf::new(origin, bg, mask(origin));
+            for (k, (e, _)) in list.iter().enumerate() {
+                let n = voxel_index(e.0);
+                l.phi[n] = e.1;
+                l.cp[n] = e.2;
+                l.src[n] = (a + k) as u32;
+                l.set[n >> 6] |= 1 << (n & 63);
+            }
+            let set = l.set;
+            (l, set)
+        })
+        .collect();
+    grid.sources = seeds.iter().flatten().map(|(e, _)| e.3).collect();
+    let mut front: Vec<[u64; 8]> = Vec::with_capacity(built.len());
+    for (l, set) in built {
+        grid.index.insert(l.origin, grid.leaves.len());
+        grid.leaves.push(l);
+        front.push(set);
     }
     drop(seeds);
 
@@ -145,17 +194,10 @@ pub fn redistance(
                 continue;
             }
             let o = grid.leaves[li].origin;
-            let mut lo = [false; 3];
-            let mut hi = [false; 3];
-            for n in 0..LEAF_SIZE {
-                if fr[n >> 6] >> (n & 63) & 1 == 1 {
-                    let k = voxel_of([0, 0, 0], n);
-                    for a in 0..3 {
-                        lo[a] |= k[a] == 0;
-                        hi[a] |= k[a] == 7;
-                    }
-                }
-            }
+            // faces touched by the front (layout: word x, bit 8y + z)
+            let any = fr.iter().fold(0u64, |a, &w| a | w);
+            let lo = [fr[0] != 0, any & 0xFF != 0, any & Z0 != 0];
+            let hi = [fr[7] != 0, any >> 56 != 0, any & Z7 != 0];
             for dx in -1i32..=1 {
                 for dy in -1i32..=1 {
                     for dz in -1i32..=1 {
@@ -172,7 +214,7 @@ pub fn redistance(
         need.sort_unstable();
         need.dedup();
         for k in need {
-            grid.ensure(k, &inside);
+            grid.ensure(k, &mask);
         }
         front.resize(grid.leaves.len(), [0; 8]);
         // leaves that may receive new values: those with or next to front voxels
@@ -226,8 +268,8 @@ pub fn redistance(
                         continue;
                     }
                     let k = voxel_of([0, 0, 0], n);
-                    let mut best = (Real::INFINITY, 0usize, 0usize);
-                    let x = world([o[0] + k[0], o[1] + k[1], o[2] + k[2]]);
+                    // nearest closest point among the set neighbours, in voxel units
+                    let mut best = (i64::MAX, [0i16; 3], 0u32);
                     for dx in -1..=1 {
                         for dy in -1..=1 {
                             for dz in -1..=1 {
@@ -236,18 +278,25 @@ pub fn redistance(
                                 };
                                 let lj = &g.leaves[j];
                                 if lj.is_set(m) {
-                                    let cp = lj.cp[m];
-                                    let cp = Vec3::new(cp[0] as Real, cp[1] as Real, cp[2] as Real);
-                                    let dist = (x - cp).norm_squared();
-                                    if dist < best.0 {
-                                        best = (dist, j, m);
+                                    let c = lj.cp[m];
+                                    let e = [
+                                        c[0] as i64 + dx as i64 * 4096,
+                                        c[1] as i64 + dy as i64 * 4096,
+                                        c[2] as i64 + dz as i64 * 4096,
+                                    ];
+                                    let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                                    if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
+                                        best = (d2, e.map(|v| v as i16), lj.src[m]);
                                     }
                                 }
                             }
                         }
                     }
-                    best.0 = best.0.sqrt();
-                    if best.0 > limit {
+                    if best.0 == i64::MAX {
+                        continue;
+                    }
+                    let dist = (best.0 as Real).sqrt() * CP_UNIT * h;
+                    if dist > limit {
                         continue;
                     }
                     let s = if inside([o[0] + k[0], o[1] + k[1], o[2] + k[2]]) {
@@ -255,8 +304,7 @@ pub fn redistance(
                     } else {
                         1.0
                     };
-                    let src = &g.leaves[best.1];
-                    out.push((n, (s * best.0) as f32, src.cp[best.2], src.vel[best.2]));
+                    out.push((n, (s * dist) as f32, best.1, best.2));
                 }
                 (!out.is_empty()).then_some((li, out))
             })
@@ -269,16 +317,25 @@ pub fn redistance(
         }
         for (li, list) in updates {
             let l = &mut grid.leaves[li];
-            for (n, phi, cp, vel) in list {
+            for (n, phi, cp, from) in list {
                 l.phi[n] = phi;
                 l.cp[n] = cp;
-                l.vel[n] = vel;
+                l.src[n] = from;
                 l.set[n >> 6] |= 1 << (n & 63);
                 front[li][n >> 6] |= 1 << (n & 63);
                 info.propagated += 1;
             }
         }
     }
+    // leaves the band never reached hold only ±background, which the signs give anyway
+    drop(front);
+    grid.leaves.retain(|l| l.set.iter().any(|&w| w != 0));
+    grid.index = grid
+        .leaves
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.origin, i))
+        .collect();
 
     let extra_inside: Vec<Key> = signs
         .blocks
@@ -288,8 +345,105 @@ pub fn redistance(
                 && b.1.iter().map(|w| w.count_ones() as usize).sum::<usize>() * 2 > LEAF_SIZE
         })
         .map(|b| b.0)
+        .chain(
+            signs
+                .interior
+                .par_iter()
+                .filter(|b| !grid.index.contains_key(*b))
+                .copied(),
+        )
         .collect();
     (grid, extra_inside, signs, info)
+}
+
+/// Smooths the band with `iterations` passes of the separable [1 2 1]/4 filter (a 3×3×3 binomial,
+/// variance ½ voxel² per axis) on the voxels whose φ is set; others keep ±background. The
+/// particles' lattice leaves bumps of ~2 voxels' wavelength on the iso-surface (Δ = 2 voxels);
+/// one pass damps them by ½ per tangential axis, while a sphere of radius R voxels moves by only
+/// ~½/R voxel (corrected by [`conserve_volume`] afterwards). Leaves are filtered independently from
+/// the unfiltered values (Jacobi), so the result does not depend on the thread count.
+pub fn smooth_band(grid: &mut WorkGrid, inside: &(impl Fn(Key) -> bool + Sync), iterations: usize) {
+    let bg = grid.bg;
+    for _ in 0..iterations {
+        let g = &*grid;
+        let out: Vec<[f32; LEAF_SIZE]> = g
+            .leaves
+            .par_iter()
+            .map(|l| {
+                let o = l.origin;
+                // padded 10³ block of φ, index (x·10 + y)·10 + z
+                let mut p = [0f32; 1000];
+                let mut nb: [Option<usize>; 27] = [None; 27];
+                for (sl, slot) in nb.iter_mut().enumerate() {
+                    let d = [
+                        (sl / 9) as i32 - 1,
+                        (sl / 3 % 3) as i32 - 1,
+                        (sl % 3) as i32 - 1,
+                    ];
+                    *slot = g
+                        .index
+                        .get(&[o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]])
+                        .copied();
+                }
+                for x in -1..9i32 {
+                    for y in -1..9i32 {
+                        for z in -1..9i32 {
+                            let s = |v: i32| {
+                                if v < 0 {
+                                    0
+                                } else if v > 7 {
+                                    2
+                                } else {
+                                    1
+                                }
+                            };
+                            let sl = (s(x) * 9 + s(y) * 3 + s(z)) as usize;
+                            let k = [o[0] + x, o[1] + y, o[2] + z];
+                            let v = match nb[sl] {
+                                Some(j) => g.leaves[j].phi[voxel_index(k)],
+                                None if inside(k) => -bg,
+                                None => bg,
+                            };
+                            p[(((x + 1) * 10 + y + 1) * 10 + z + 1) as usize] = v;
+                        }
+                    }
+                }
+                let at = |x: usize, y: usize, z: usize| (x * 10 + y) * 10 + z;
+                let mut a = [0f32; 1000];
+                for x in 1..9 {
+                    for y in 0..10 {
+                        for z in 0..10 {
+                            a[at(x, y, z)] = 0.25
+                                * (p[at(x - 1, y, z)] + 2.0 * p[at(x, y, z)] + p[at(x + 1, y, z)]);
+                        }
+                    }
+                }
+                let mut b = [0f32; 1000];
+                for x in 1..9 {
+                    for y in 1..9 {
+                        for z in 0..10 {
+                            b[at(x, y, z)] = 0.25
+                                * (a[at(x, y - 1, z)] + 2.0 * a[at(x, y, z)] + a[at(x, y + 1, z)]);
+                        }
+                    }
+                }
+                let mut phi = l.phi;
+                for (n, v) in phi.iter_mut().enumerate() {
+                    if l.is_set(n) {
+                        let k = voxel_of([1, 1, 1], n);
+                        let (x, y, z) = (k[0] as usize, k[1] as usize, k[2] as usize);
+                        *v =
+                            0.25 * (b[at(x, y, z - 1)] + 2.0 * b[at(x, y, z)] + b[at(x, y, z + 1)]);
+                    }
+                }
+                phi
+            })
+            .collect();
+        grid.leaves
+            .par_iter_mut()
+            .zip(out)
+            .for_each(|(l, phi)| l.phi = phi);
+    }
 }
 
 /// Volume-preserving offset. Centre smoothing (λ) and flattened surface kernels pull the
@@ -322,7 +476,13 @@ pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, ban
         .par_iter()
         .filter(|b| !grid.index.contains_key(&b.0))
         .map(|b| b.1.iter().map(|w| w.count_ones() as Real).sum::<Real>())
-        .sum::<Real>();
+        .sum::<Real>()
+        + signs
+            .interior
+            .par_iter()
+            .filter(|b| !grid.index.contains_key(*b))
+            .count() as Real
+            * LEAF_SIZE as Real;
     // V(s), A(s) of the shifted field φ + s
     let eval = |s: Real| {
         let (v, a) = grid
@@ -349,7 +509,12 @@ pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, ban
         if area.is_nan() || area <= 0.0 {
             break;
         }
-        shift = (shift + (vol - target) / area).clamp(-lim, lim);
+        let next = (shift + (vol - target) / area).clamp(-lim, lim);
+        let step = (next - shift).abs();
+        shift = next;
+        if step < 1e-4 * h {
+            break;
+        }
     }
     let bg = grid.bg;
     grid.leaves.par_iter_mut().for_each(|l| {

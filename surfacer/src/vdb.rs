@@ -17,6 +17,7 @@ use crate::levelset::LevelSet;
 use crate::SurfaceError;
 use flate2::write::ZlibEncoder;
 use flate2::Compression;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
@@ -218,14 +219,25 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
         for (leaves, _) in n1s.values() {
             let mut ls_sorted = leaves.clone();
             ls_sorted.sort_by_key(|&l| n1_index(ls.leaves[l].origin));
-            for l in ls_sorted {
-                let leaf = &ls.leaves[l];
-                o.mask(&leaf.active);
-                let raw = match kind {
-                    Kind::Surface => f32_bytes(leaf.phi.iter().copied()),
-                    Kind::Velocity => f32_bytes(leaf.vel.iter().flat_map(|v| v.iter().copied())),
-                };
-                o.values(&raw);
+            // leaf buffers encoded in parallel, appended in order
+            let bufs: Vec<Vec<u8>> = ls_sorted
+                .par_iter()
+                .map(|&l| {
+                    let leaf = &ls.leaves[l];
+                    let mut b = Out(Vec::new());
+                    b.mask(&leaf.active);
+                    let raw = match kind {
+                        Kind::Surface => f32_bytes(leaf.phi.iter().copied()),
+                        Kind::Velocity => {
+                            f32_bytes((0..512).flat_map(|n| leaf.vel_at(n).unwrap_or([0.0; 3])))
+                        }
+                    };
+                    b.values(&raw);
+                    b.0
+                })
+                .collect();
+            for b in bufs {
+                o.0.extend_from_slice(&b);
             }
         }
     }

@@ -64,10 +64,12 @@ fn sphere_of_volume_particles_matches_the_sphere() {
         100.0 * (vol / exact_vol - 1.0),
         m.tris.len()
     );
-    // systematic and rms error within half a voxel; the maximum is bounded by the particles'
-    // own roughness (jittered lattice, a fraction of Δ = 2 voxels)
-    assert!(lmean.abs() < 0.25 && lrms < 0.5 && lmax < 1.0);
-    assert!(mmean.abs() < 0.25 && mrms < 0.5 && mmax < 1.0);
+    // systematic error within 0.05 and rms within a quarter voxel; the maximum (0.64 voxel) is
+    // where the lattice ball itself is faceted: along ⟨110⟩ its outermost (110) plane lies
+    // 0.28 Δ = 0.56 voxel inside the volume-equivalent sphere, and the surface follows the
+    // particles there
+    assert!(lmean.abs() < 0.05 && lrms < 0.25 && lmax < 0.7);
+    assert!(mmean.abs() < 0.05 && mrms < 0.25 && mmax < 0.7);
     assert!((vol / exact_vol - 1.0).abs() < 0.02);
     assert_closed_manifold(m, "sphere");
     assert_eq!(m.components(), 1);

@@ -258,9 +258,11 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
             100.0 * (g.mesh.volume() / pvol - 1.0)
         );
         eprintln!(
-            "  {}: density blocks {}, grid bytes {:.0} MB, isotropic kernels {}, redistance {:?}, volume shift {:.2e} m",
+            "  {}: deep kernels {}, band blocks {}, interior blocks {}, grid bytes {:.0} MB, isotropic kernels {}, redistance {:?}, volume shift {:.2e} m",
             if aniso { "anisotropic" } else { "isotropic" },
+            st.deep_kernels,
             st.density_blocks,
+            st.interior_blocks,
             st.grid_bytes as f64 / 1e6,
             st.isotropic_kernels,
             st.redistance,

@@ -29,7 +29,9 @@ pub fn ball(f: &mut ParticleFrame, c: Vec3, r: Real, dx: Real, jit: Real, v: Vec
         for j in -n..=n {
             for k in -n..=n {
                 let p = Vec3::new(i as Real, j as Real, k as Real) * dx;
-                if p.norm() <= r {
+                // lattice points exactly on the sphere belong to the ball (without the tolerance,
+                // rounding dropped e.g. (12, 0, 0)·0.05 = 0.6000000000000001 from a ball of 0.6)
+                if p.norm() <= r * (1.0 + 1e-12) {
                     let mut jv = || (rand01(&mut s) - 0.5) * jit * dx;
                     let q = c + p + Vec3::new(jv(), jv(), jv());
                     let id = f.len() as u32;
