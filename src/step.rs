@@ -374,7 +374,7 @@ pub fn step(
         .and_then(|c| c.transitions.as_ref().map(|t| (t, &c.sources)))
     {
         info.transitions = timed(times, "transition", || {
-            coupling::codim::update(particles, tp, src)
+            coupling::codim::update(particles, tp, src, solids)
         });
     } else {
         times.add("transition", 0.0);

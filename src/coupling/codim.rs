@@ -25,6 +25,7 @@ use crate::math::{Mat3, Real, Vec3};
 use crate::mls::frame::pca_frame;
 use crate::neighbors::neighbor_lists;
 use crate::particles::{Codim, Particles};
+use crate::solids::SolidSet;
 use crate::transition::{new_codim, TransitionCounts, TransitionParams};
 use rayon::prelude::*;
 
@@ -54,11 +55,15 @@ impl Source {
 }
 
 /// Applies the transition rules to every non-fixed particle of `parts`
-/// outside the source regions.
+/// outside the source regions. A volume particle within h of a solid keeps
+/// its codimension: its empty cone faces the wall, not air (a droplet
+/// spreading on a plane would otherwise turn its wetted face into sheet
+/// particles).
 pub fn update(
     parts: &mut Particles,
     prm: &TransitionParams,
     sources: &[Source],
+    solids: &SolidSet,
 ) -> TransitionCounts {
     let h = prm.h;
     let x = &parts.x;
@@ -76,6 +81,7 @@ pub fn update(
             if parts.fixed[p]
                 || codim[p] == Codim::Point
                 || sources.iter().any(|s| s.protects(&x[p], h))
+                || (codim[p] == Codim::Volume && !solids.is_empty() && solids.phi(&x[p]) < h)
             {
                 return codim[p];
             }
@@ -141,7 +147,7 @@ mod tests {
         let mut p = block(n, s);
         let prm = TransitionParams::paper(4.0 * s);
         let mass0 = p.total_mass();
-        let c = update(&mut p, &prm, &[]);
+        let c = update(&mut p, &prm, &[], &SolidSet::default());
         // the outer layer of the cube is exposed on faces; corners/edges too
         let on_boundary = |x: &Vec3| {
             x.iter()
@@ -175,7 +181,7 @@ mod tests {
             0.1,
             Codim::Sheet,
         );
-        let c = update(&mut p, &prm, &[]);
+        let c = update(&mut p, &prm, &[], &SolidSet::default());
         assert_eq!(p.codim[q], Codim::Volume);
         assert!(c.sheet_to_volume >= 1);
     }
