@@ -27,7 +27,7 @@ use crate::math::{Mat3, Real, Vec3};
 use crate::mls::operators::{par_fit_map, par_frames, Neighborhoods};
 use crate::mls::{JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
-use crate::reseed::{reseed, LocalShape};
+use crate::reseed::{reseed_guarded, LocalShape};
 use crate::tension::{
     bud_force, filament_role, rim_force, sawtooth, solve as solve_tension, FilamentRole,
     TensionSystem,
@@ -194,6 +194,29 @@ pub fn step(
                     info.transitions.filament_to_point += 1;
                 }
             }
+            // a sheet particle that spans no plane (isolated, fewer than three
+            // sheet neighbours, or a line-like neighbourhood) has no sheet fit:
+            // it joins the filaments, or becomes a point when alone
+            let old: Vec<Codim> = film.codim.clone();
+            for (i, f) in frames.iter().enumerate() {
+                if old[i] != Codim::Sheet || film.fixed[i] {
+                    continue;
+                }
+                let nbrs = nb.lists.of(i);
+                let n_sheet_nbrs = nbrs
+                    .iter()
+                    .filter(|&&q| old[q as usize] == Codim::Sheet)
+                    .count();
+                let [l1, l2, _] = f.eigenvalues;
+                if nbrs.is_empty() {
+                    film.codim[i] = Codim::Point;
+                    info.transitions.sheet_to_filament += 1;
+                    info.transitions.filament_to_point += 1;
+                } else if n_sheet_nbrs < 3 || !(l2 >= prm.sheet_line_ratio * l1) {
+                    film.codim[i] = Codim::Filament;
+                    info.transitions.sheet_to_filament += 1;
+                }
+            }
         }
         info.timings.transition = t.elapsed().as_secs_f64();
         // 3. reseeding
@@ -203,7 +226,16 @@ pub fn step(
                 f.map(|f| (f.slope, f.second))
             });
             let shape = FittedShape { h, geo };
-            info.reseed = reseed(&mut film, &axes, |i| nb.lists.of(i), &shape, rp);
+            // filament insertion only along line-like filament frames (the
+            // frame of a particle that was a sheet until this step is a
+            // sheet frame; a clump has no tangent)
+            let nb_joint = nb.n_sheet;
+            let line_like = |i: usize| {
+                let [l1, l2, _] = frames[i].eigenvalues;
+                i >= nb_joint && l1 > 0.0 && l2 <= prm.clump_ratio * l1
+            };
+            info.reseed =
+                reseed_guarded(&mut film, &axes, |i| nb.lists.of(i), &shape, rp, line_like);
         }
         info.timings.reseed = t.elapsed().as_secs_f64();
     } else {
