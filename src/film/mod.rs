@@ -152,6 +152,9 @@ pub struct FilmStepInfo {
     pub fits: FitStats,
     /// Enclosed gas volume (m³), when the scene has gas.
     pub gas_volume: Option<Real>,
+    /// Stages 4–6 reused the neighbourhoods, frames and Laplacian rows of
+    /// stage 2 (the particle set did not change in between).
+    pub reused_neighborhoods: bool,
 }
 
 /// Why a film step failed.
