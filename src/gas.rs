@@ -32,8 +32,17 @@
 use crate::math::{Real, Vec3};
 use std::collections::VecDeque;
 
-/// Flips the given unit normals so that neighbouring ones agree and the
-/// normal of the particle farthest from the centroid points away from it.
+/// Flips the given unit normals so that neighbouring ones agree and, in
+/// each connected component, the normals point away from the component's
+/// centroid c on (count) majority: Σ n_i·(x_i − c) > 0.
+///
+/// The vote, not one seed particle, fixes the sign: on any spherical cap
+/// (a bubble with its hole, whatever its size) the outward normal satisfies
+/// n·(x − c) = R − n·(c − O) > 0 at *every* point, because the cap's
+/// centroid c lies inside the sphere of centre O. A single seed (the
+/// particle farthest from c, at the rim) carries the tilted normal of an open
+/// edge and flipped a whole bursting-bubble cap inwards once the hole passed
+/// the equator; the gas pressure then pushed the film inwards.
 /// `nbrs(i)` lists the film neighbours of particle i (indices into `x`).
 /// Returns the number of connected components found.
 pub fn orient_normals<'a>(
@@ -71,6 +80,7 @@ pub fn orient_normals<'a>(
         done[seed] = true;
         queue.push_back(seed);
         components += 1;
+        let mut members = vec![seed];
         while let Some(i) = queue.pop_front() {
             for &j in nbrs(i) {
                 let j = j as usize;
@@ -80,7 +90,19 @@ pub fn orient_normals<'a>(
                     }
                     done[j] = true;
                     queue.push_back(j);
+                    members.push(j);
                 }
+            }
+        }
+        // majority vote of the component about its own centroid
+        let cc: Vec3 = members.iter().map(|&i| x[i]).sum::<Vec3>() / members.len() as Real;
+        let vote: Real = members
+            .iter()
+            .map(|&i| normals[i].dot(&(x[i] - cc)).signum())
+            .sum();
+        if vote < 0.0 {
+            for &i in &members {
+                normals[i] = -normals[i];
             }
         }
     }
@@ -194,6 +216,55 @@ mod tests {
                 Vec3::new(r * rho * t.cos(), r * rho * t.sin(), r * z) + Vec3::new(0.3, -0.1, 2.0)
             })
             .collect()
+    }
+
+    #[test]
+    fn cap_smaller_than_a_hemisphere_is_oriented_outwards_despite_a_bad_rim_normal() {
+        // the bottom cap of a bursting bubble once the hole passed the equator
+        let (n, r) = (4000, 0.05);
+        let c = Vec3::new(0.3, -0.1, 2.0);
+        let x: Vec<Vec3> = golden_sphere(n, r)
+            .into_iter()
+            .filter(|p| (p - c).z < -(1.2 as Real).cos() * r)
+            .collect();
+        let m = x.len();
+        let outward: Vec<Vec3> = x.iter().map(|p| (p - c).normalize()).collect();
+        let mut normals: Vec<Vec3> = outward
+            .iter()
+            .enumerate()
+            .map(|(i, nn)| nn * if i % 3 == 0 { -1.0 } else { 1.0 })
+            .collect();
+        // the particle farthest from the cap's centroid (a rim particle) gets a
+        // tilted normal: away from the centroid, yet against the true normal
+        let cc: Vec3 = x.iter().sum::<Vec3>() / m as Real;
+        let seed = (0..m)
+            .max_by(|&a, &b| {
+                (x[a] - cc)
+                    .norm_squared()
+                    .partial_cmp(&(x[b] - cc).norm_squared())
+                    .unwrap()
+                    .then(b.cmp(&a))
+            })
+            .unwrap();
+        let d = (x[seed] - cc).normalize();
+        let cphi = d.dot(&outward[seed]);
+        assert!(cphi > 0.0 && cphi < 1.0);
+        let k = 0.5 * (cphi + 1.0 / cphi);
+        normals[seed] = (d - outward[seed] * k).normalize();
+        assert!(normals[seed].dot(&d) > 0.0 && normals[seed].dot(&outward[seed]) < 0.0);
+        let nl = neighbor_lists(
+            &x,
+            3.0 * r * (4.0 * std::f64::consts::PI / n as Real).sqrt(),
+        );
+        assert_eq!(orient_normals(&x, &mut normals, |i| nl.of(i)), 1);
+        let wrong = (0..m)
+            .filter(|&i| i != seed && normals[i].dot(&outward[i]) < 0.0)
+            .count();
+        assert_eq!(wrong, 0, "{wrong} of {m} normals point inwards");
+        // and the sphere fit through the oriented cap finds the bubble
+        let area = vec![1.0; m];
+        let (fc, fr) = fit_sphere(&x, &normals, &area).unwrap();
+        assert!((fr / r - 1.0).abs() < 1e-3 && (fc - c).norm() < 1e-3 * r);
     }
 
     #[test]

@@ -88,6 +88,11 @@ pub struct ReseedCounts {
     pub absorbed: u64,
     /// Light particles merged into a neighbour.
     pub light_merged: u64,
+    /// Filament particles left out of filament insertion because their
+    /// neighbourhood is not line-like (a clump) or their frame is not a
+    /// filament frame (a counted guard, see [`reseed_guarded`]).
+    #[serde(default)]
+    pub filament_skipped: u64,
 }
 
 /// The local surface (sheets) or curve (filaments) of particle p in its own
@@ -431,35 +436,57 @@ pub fn reseed<'a>(
     shape: &dyn LocalShape,
     prm: &ReseedParams,
 ) -> ReseedCounts {
+    reseed_guarded(parts, frames, nbrs, shape, prm, |_| true)
+}
+
+/// [`reseed`] with a guard on filament insertion: filament particle `p`
+/// proposes candidates only when `filament_ok(p)`; the others are counted in
+/// [`ReseedCounts::filament_skipped`]. The film step passes "the frame was
+/// built from filament neighbours and is line-like" (PCA λ₂ ≤ ratio × λ₁):
+/// on a clump no curve fits, and inserting along a garbage tangent
+/// multiplied clumps on the bursting bubble.
+pub fn reseed_guarded<'a>(
+    parts: &mut Particles,
+    frames: &[Mat3],
+    nbrs: impl Fn(usize) -> &'a [u32] + Sync,
+    shape: &dyn LocalShape,
+    prm: &ReseedParams,
+    filament_ok: impl Fn(usize) -> bool + Sync,
+) -> ReseedCounts {
     let n0 = parts.len();
     let view: &Particles = parts;
-    let per: Vec<(Vec<Vec3>, Vec<Vec3>)> = (0..n0)
+    let per: Vec<(Vec<Vec3>, Vec<Vec3>, bool)> = (0..n0)
         .into_par_iter()
         .map(|p| {
             if view.fixed[p] {
-                return (Vec::new(), Vec::new());
+                return (Vec::new(), Vec::new(), false);
             }
             match view.codim[p] {
                 Codim::Sheet => (
                     sheet_candidates(p, view, &frames[p], nbrs(p), prm, shape),
                     Vec::new(),
+                    false,
                 ),
+                Codim::Filament if !filament_ok(p) => (Vec::new(), Vec::new(), true),
                 Codim::Filament => (
                     Vec::new(),
                     filament_candidates(p, view, &frames[p], nbrs(p), prm, shape),
+                    false,
                 ),
-                _ => (Vec::new(), Vec::new()),
+                _ => (Vec::new(), Vec::new(), false),
             }
         })
         .collect();
+    let skipped = per.iter().filter(|t| t.2).count() as u64;
     let (mut sc, mut fc) = (Vec::new(), Vec::new());
-    for (s, f) in per {
+    for (s, f, _) in per {
         sc.extend(s);
         fc.extend(f);
     }
     let mut c = ReseedCounts {
         sheet_inserted: insert(parts, Codim::Sheet, sc, prm),
         filament_inserted: insert(parts, Codim::Filament, fc, prm),
+        filament_skipped: skipped,
         ..Default::default()
     };
     c.absorbed = absorb_into_rims(parts, prm);

@@ -91,3 +91,89 @@ fn film_resume_is_byte_identical() {
         assert!(x == y, "frame {f} differs after resume");
     }
 }
+
+#[test]
+fn bursting_bubble_rim_retracts_at_the_taylor_culick_speed_past_40_ms() {
+    // the shipped preset at s = 4 mm (~2.5k particles), 100 ms
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/presets/bursting_bubble.yaml"
+    ))
+    .unwrap();
+    let text = text.replace("dx: 0.0023 ", "dx: 0.012 ");
+    assert!(text.contains("dx: 0.012 "), "preset dx line changed");
+    let scene = tmp.path().join("bubble.yaml");
+    std::fs::write(&scene, text).unwrap();
+    let (r0, sigma, rho, tau) = (0.0576, 5e-4, 1000.0, 1e-6);
+    let v_tc = (2.0 * sigma / (rho * tau) as f64).sqrt();
+    let mut sim = Sim::open(
+        &scene,
+        &RunOptions {
+            out_root: Some(tmp.path().to_path_buf()),
+            frames: Some(6),
+            resume: false,
+        },
+    )
+    .unwrap();
+    let m0 = sim.state.particles.total_mass();
+    // rim position: arc length from the hole axis (+y) to the sheet's edge
+    // (2nd percentile of the sheet particles' polar angles); cap radius
+    let rim = |p: &codimfx::particles::Particles| {
+        let mut th: Vec<f64> = (0..p.len())
+            .filter(|&i| p.codim[i] == codimfx::particles::Codim::Sheet)
+            .map(|i| (p.x[i].y / p.x[i].norm()).clamp(-1.0, 1.0).acos())
+            .collect();
+        th.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        let r_mean = (0..p.len())
+            .filter(|&i| p.codim[i] == codimfx::particles::Codim::Sheet)
+            .map(|i| p.x[i].norm())
+            .sum::<f64>()
+            / th.len() as f64;
+        (th[th.len() / 50] * r0, r_mean)
+    };
+    let mut arcs = vec![rim(&sim.state.particles).0];
+    sim.run(&AtomicBool::new(false), |s, _| {
+        let (arc, r_mean) = rim(&s.state.particles);
+        // the remaining cap keeps its radius (the gas holds it)
+        assert!(
+            (r_mean / r0 - 1.0).abs() < 0.1,
+            "frame {}: cap radius {r_mean}",
+            s.frame
+        );
+        arcs.push(arc);
+    })
+    .unwrap();
+    let dt = 1.0 / 60.0;
+    let speeds: Vec<f64> = arcs.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+    eprintln!("rim arcs {arcs:?}\nspeeds {speeds:?} (Taylor-Culick {v_tc})");
+    // after the first frame (the rim forms) the rim moves at the
+    // Taylor-Culick speed, also well past 40 ms
+    let mean = (arcs[6] - arcs[1]) / (5.0 * dt);
+    assert!((mean / v_tc - 1.0).abs() < 0.15, "mean rim speed {mean}");
+    for (k, v) in speeds.iter().enumerate().skip(1) {
+        assert!(
+            (v / v_tc - 1.0).abs() < 0.3,
+            "frame {}: rim speed {v}",
+            k + 1
+        );
+    }
+    let m = Manifest::read(&sim.dir.join("manifest.json")).unwrap();
+    let last = m.frames.last().unwrap();
+    assert!(last.counts["filament"] > 0 && last.counts["point"] > 0);
+    let events: u64 = m
+        .frames
+        .iter()
+        .map(|r| r.transitions.filament_to_point)
+        .sum();
+    assert!(events > 0);
+    for r in &m.frames {
+        assert!(
+            (r.total_mass - m0).abs() <= 1e-12 * m0,
+            "frame {} mass",
+            r.frame
+        );
+        assert_eq!(r.tension.unconverged, 0);
+    }
+    assert!(sim.state.particles.all_finite());
+}

@@ -98,3 +98,89 @@ fn catenoid_beyond_the_critical_separation_pinches() {
     assert!(p.all_finite());
     assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
 }
+
+#[test]
+fn film_viscosity_decays_spherical_harmonics_at_the_surface_laplacian_rate() {
+    // Implicit MLS viscosity (eq. 13) alone (σ = 0, no transitions/reseeding):
+    // (M − μΔt V L) u = M u*. A velocity component equal to a degree-l
+    // spherical harmonic on a sphere of radius R is an eigenfunction of the
+    // Laplace–Beltrami operator with eigenvalue −l(l+1)/R², so one step
+    // multiplies it by 1/(1 + ν Δt l(l+1)/R²), ν = μ/ρ.
+    use codimfx::film::deformation::latitude_sphere;
+    use codimfx::film::step::step;
+    use codimfx::particles::Codim;
+    let (r, s) = (0.05, 0.004);
+    let dt = 0.01;
+    for (l, mode) in [
+        (1, (|z: Real| z) as fn(Real) -> Real),
+        (2, |z: Real| 1.5 * z * z - 0.5),
+    ] {
+        let lambda = (l * (l + 1)) as Real / (r * r);
+        let mut prm = FilmParams::new(3.0 * s, 0.0);
+        prm.gravity = Vec3::zeros();
+        prm.transitions = None;
+        prm.reseed = None;
+        // ν Δt λ = 1: the mode halves in one step
+        prm.viscosity = prm.density / (dt * lambda);
+        let mut p = Particles::new();
+        let u0 = 1e-3;
+        for x in latitude_sphere(Vec3::zeros(), r, s) {
+            let v = Vec3::new(u0 * mode(x.z / r), 0.0, 0.0);
+            p.push(x, v, 1e-9, 5e-7, Codim::Sheet);
+        }
+        let m0 = p.total_mass();
+        let project = |p: &Particles| {
+            let (mut num, mut den) = (0.0, 0.0);
+            for i in 0..p.len() {
+                let y = mode(p.x[i].z / p.x[i].norm());
+                num += p.v[i].x * y;
+                den += y * y;
+            }
+            num / den
+        };
+        let a0 = project(&p);
+        let mut st = FilmState::default();
+        let info = step(&mut p, &mut st, &prm, dt).expect("film step");
+        assert!(
+            info.viscosity_solve[0].iterations > 0,
+            "viscosity solve skipped"
+        );
+        let a1 = project(&p);
+        let got = a1 / a0;
+        let want = 1.0 / (1.0 + prm.viscosity / prm.density * dt * lambda);
+        // decay rate (1/factor − 1 = νΔtλ_h) against the analytic eigenvalue
+        let rate_err = ((1.0 / got - 1.0) / (1.0 / want - 1.0) - 1.0).abs();
+        eprintln!(
+            "l = {l}: {} particles, factor {got:.5} vs {want:.5}, eigenvalue error {:.2} %",
+            p.len(),
+            rate_err * 100.0
+        );
+        assert!(
+            rate_err < 0.03,
+            "l = {l}: eigenvalue off by {:.2} %",
+            rate_err * 100.0
+        );
+        // the other components stay at rest, the mode keeps its shape
+        let off: Real = (0..p.len())
+            .map(|i| p.v[i].y.abs().max(p.v[i].z.abs()))
+            .fold(0.0, Real::max);
+        assert!(off < 1e-6 * u0, "y/z velocity appeared: {off}");
+        let resid: Real = (0..p.len())
+            .map(|i| (p.v[i].x - a1 * mode(p.x[i].z / p.x[i].norm())).abs())
+            .fold(0.0, Real::max);
+        assert!(
+            resid < 0.05 * a1.abs(),
+            "mode lost its shape: {resid} vs {a1}"
+        );
+        assert!((p.total_mass() - m0).abs() <= 1e-12 * m0);
+        // μ = 0 skips the solve and leaves the velocity alone
+        prm.viscosity = 0.0;
+        let v1 = p.v.clone();
+        let info = step(&mut p, &mut st, &prm, dt).expect("film step");
+        assert_eq!(info.viscosity_solve[0].iterations, 0);
+        let dv = (0..p.len())
+            .map(|i| (p.v[i] - v1[i]).norm())
+            .fold(0.0, Real::max);
+        assert!(dv <= 1e-12 * u0, "velocity changed without viscosity: {dv}");
+    }
+}

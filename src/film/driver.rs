@@ -172,6 +172,7 @@ pub fn advance(
         a.filament_removed += b.filament_removed;
         a.absorbed += b.absorbed;
         a.light_merged += b.light_merged;
+        a.filament_skipped += b.filament_skipped;
         rec.fallbacks.step_halvings += halvings as u64;
         if s.film.max_speed > 0.0 {
             for v in p.v.iter_mut() {

@@ -61,6 +61,12 @@ pub struct FilmParams {
     /// A filament particle whose neighbourhood's second PCA eigenvalue
     /// exceeds this fraction of the first is a clump and becomes a point.
     pub clump_ratio: Real,
+    /// A sheet particle with fewer than 3 sheet neighbours, or whose
+    /// neighbourhood is line-like (second PCA eigenvalue below this fraction
+    /// of the first), spans no plane: it becomes a filament particle, or a
+    /// point when it has no neighbour at all (counted as sheet → filament,
+    /// plus filament → point).
+    pub sheet_line_ratio: Real,
     /// Rim tension modulation (fluid polygon): corners and amplitude about the vertical axis through `centre`.
     pub rim_modulation: Option<(u32, Real, Vec3)>,
 }
@@ -97,6 +103,7 @@ impl FilmParams {
             solver: BicgstabParams::default(),
             bud_angle: std::f64::consts::PI / 6.0,
             clump_ratio: 0.3,
+            sheet_line_ratio: 0.05,
             rim_modulation: None,
         }
     }
@@ -145,6 +152,9 @@ pub struct FilmStepInfo {
     pub fits: FitStats,
     /// Enclosed gas volume (m³), when the scene has gas.
     pub gas_volume: Option<Real>,
+    /// Stages 4–6 reused the neighbourhoods, frames and Laplacian rows of
+    /// stage 2 (the particle set did not change in between).
+    pub reused_neighborhoods: bool,
 }
 
 /// Why a film step failed.

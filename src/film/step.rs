@@ -24,10 +24,11 @@ use crate::area::{
 use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_force};
 use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
 use crate::math::{Mat3, Real, Vec3};
+use crate::mls::laplacian::{row_entries, Rows};
 use crate::mls::operators::{par_fit_map, par_frames, Neighborhoods};
-use crate::mls::{JointLaplacian, MlsParams};
+use crate::mls::{FitStats, Frame, JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
-use crate::reseed::{reseed, LocalShape};
+use crate::reseed::{reseed_guarded, LocalShape};
 use crate::tension::{
     bud_force, filament_role, rim_force, sawtooth, solve as solve_tension, FilamentRole,
     TensionSystem,
@@ -36,6 +37,13 @@ use crate::transition::update_codims;
 use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
 use std::time::Instant;
+
+/// What stage 2 built and stages 4–6 may reuse.
+struct Kept {
+    nb: Neighborhoods,
+    frames: Vec<Frame>,
+    rows: Option<(Rows, FitStats)>,
+}
 
 /// Local geometry of every joint particle, as a Taylor quadratic of its fit
 /// (scaled coordinates η = ξ/h): slope and second derivatives at η = 0.
@@ -163,6 +171,10 @@ pub fn step(
         sheet_weight_in_filament: 0.0,
         ..prm.mls
     };
+    // neighbourhoods, frames and (speculatively) the tension Laplacian rows of
+    // stage 2, reused by stages 4–6 when neither the transitions nor the
+    // reseeding changed the particle set (same positions, same joint order)
+    let mut kept: Option<Kept> = None;
     if !film.is_empty() && (prm.transitions.is_some() || prm.reseed.is_some()) {
         let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
         let frames = par_frames(&nb, &geom_mls);
@@ -194,18 +206,73 @@ pub fn step(
                     info.transitions.filament_to_point += 1;
                 }
             }
+            // a sheet particle that spans no plane (isolated, fewer than three
+            // sheet neighbours, or a line-like neighbourhood) has no sheet fit:
+            // it joins the filaments, or becomes a point when alone
+            let old: Vec<Codim> = film.codim.clone();
+            for (i, f) in frames.iter().enumerate() {
+                if old[i] != Codim::Sheet || film.fixed[i] {
+                    continue;
+                }
+                let nbrs = nb.lists.of(i);
+                let n_sheet_nbrs = nbrs
+                    .iter()
+                    .filter(|&&q| old[q as usize] == Codim::Sheet)
+                    .count();
+                let [l1, l2, _] = f.eigenvalues;
+                if nbrs.is_empty() {
+                    film.codim[i] = Codim::Point;
+                    info.transitions.sheet_to_filament += 1;
+                    info.transitions.filament_to_point += 1;
+                } else if n_sheet_nbrs < 3 || !(l2 >= prm.sheet_line_ratio * l1) {
+                    film.codim[i] = Codim::Filament;
+                    info.transitions.sheet_to_filament += 1;
+                }
+            }
         }
         info.timings.transition = t.elapsed().as_secs_f64();
         // 3. reseeding
         let t = Instant::now();
+        let mut rows = None;
         if let Some(rp) = &prm.reseed {
-            let (geo, _) = par_fit_map(&nb, &frames, &geom_mls, |_, f| {
-                f.map(|f| (f.slope, f.second))
+            // one fit pass gives the reseeding's local shapes and the rows of
+            // the tension Laplacian (used if the set does not change)
+            // (rows only when the transitions left the set alone: otherwise
+            // the set changes anyway and the rows would be thrown away)
+            let christoffel = geom_mls.christoffel;
+            let speculate = info.transitions.total() == 0;
+            let (both, stats) = par_fit_map(&nb, &frames, &geom_mls, |_, f| {
+                f.map_or((None, Vec::new()), |f| {
+                    let row = if speculate {
+                        row_entries(f, christoffel)
+                    } else {
+                        Vec::new()
+                    };
+                    (Some((f.slope, f.second)), row)
+                })
             });
+            let (geo, r): (Vec<_>, Vec<_>) = both.into_iter().unzip();
+            rows = speculate.then_some((r, stats));
             let shape = FittedShape { h, geo };
-            info.reseed = reseed(&mut film, &axes, |i| nb.lists.of(i), &shape, rp);
+            // filament insertion only along line-like filament frames (the
+            // frame of a particle that was a sheet until this step is a
+            // sheet frame; a clump has no tangent)
+            let nb_joint = nb.n_sheet;
+            let line_like = |i: usize| {
+                let [l1, l2, _] = frames[i].eigenvalues;
+                i >= nb_joint && l1 > 0.0 && l2 <= prm.clump_ratio * l1
+            };
+            info.reseed =
+                reseed_guarded(&mut film, &axes, |i| nb.lists.of(i), &shape, rp, line_like);
         }
         info.timings.reseed = t.elapsed().as_secs_f64();
+        let r = &info.reseed;
+        let unchanged = info.transitions.total() == 0
+            && r.sheet_inserted + r.sheet_removed + r.filament_inserted + r.filament_removed == 0
+            && r.absorbed + r.light_merged == 0;
+        if unchanged {
+            kept = Some(Kept { nb, frames, rows });
+        }
     } else {
         info.timings.transition = t.elapsed().as_secs_f64();
     }
@@ -223,8 +290,17 @@ pub fn step(
 
     // 4. areas, thickness, explicit forces
     let t = Instant::now();
-    let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
-    let frames = par_frames(&nb, &geom_mls);
+    let (nb, frames, rows) = match kept {
+        Some(k) => {
+            info.reused_neighborhoods = true;
+            (k.nb, k.frames, k.rows)
+        }
+        None => {
+            let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
+            let frames = par_frames(&nb, &geom_mls);
+            (nb, frames, None)
+        }
+    };
     let n = film.len();
     let n_sheet = nb.n_sheet;
     let rho = prm.density;
@@ -375,14 +451,17 @@ pub fn step(
     let mut u: Vec<Vec3> = film.v.clone();
     if prm.viscosity > 0.0 {
         let t = Instant::now();
-        let lv = JointLaplacian::assemble(&nb, &prm.mls)?;
+        let lv = JointLaplacian::assemble_with_frames(&nb, &frames, &prm.mls)?;
         info.viscosity_solve = viscosity(&lv.matrix, &film, &mut u, prm, dt)?;
         info.timings.viscosity = t.elapsed().as_secs_f64();
     }
 
     // 6. semi-implicit surface tension (eq. 16)
     let t = Instant::now();
-    let l = JointLaplacian::assemble(&nb, &geom_mls)?;
+    let l = match rows {
+        Some((rows, stats)) => JointLaplacian::from_rows(&nb, rows, stats)?,
+        None => JointLaplacian::assemble_with_frames(&nb, &frames, &geom_mls)?,
+    };
     info.fits = l.stats;
     info.timings.operators = t.elapsed().as_secs_f64();
     let t = Instant::now();

@@ -12,6 +12,7 @@
 //! result does not depend on the thread count. Every row sums to zero up to
 //! round-off, because the fits reproduce constants.
 
+use super::frame::Frame;
 use super::operators::{par_fit_map, par_frames, LocalFit, Neighborhoods};
 use super::{FitStats, MlsError, MlsParams};
 use crate::math::{Real, Vec3};
@@ -52,8 +53,27 @@ pub fn laplacian_rows(
 ) -> Result<(Rows, FitStats), MlsError> {
     params.validate()?;
     let frames = par_frames(nb, params);
+    laplacian_rows_with_frames(nb, &frames, params)
+}
+
+/// [`laplacian_rows`] with the frames already computed (`par_frames(nb, p)`
+/// for any `p` with the same `h` and `filament_weight_in_sheet`: the frames
+/// do not depend on the other fit settings).
+pub fn laplacian_rows_with_frames(
+    nb: &Neighborhoods,
+    frames: &[Frame],
+    params: &MlsParams,
+) -> Result<(Rows, FitStats), MlsError> {
+    params.validate()?;
+    if frames.len() != nb.len() {
+        return Err(MlsError::Length {
+            what: "frames",
+            got: frames.len(),
+            expected: nb.len(),
+        });
+    }
     let christoffel = params.christoffel;
-    Ok(par_fit_map(nb, &frames, params, |_, f| {
+    Ok(par_fit_map(nb, frames, params, |_, f| {
         f.map_or_else(Vec::new, |f| row_entries(f, christoffel))
     }))
 }
@@ -85,6 +105,28 @@ impl JointLaplacian {
     /// Builds the joint Laplacian of the neighbourhoods with `params`.
     pub fn assemble(nb: &Neighborhoods, params: &MlsParams) -> Result<JointLaplacian, MlsError> {
         let (rows, stats) = laplacian_rows(nb, params)?;
+        JointLaplacian::from_rows(nb, rows, stats)
+    }
+
+    /// [`JointLaplacian::assemble`] with the frames already computed (see
+    /// [`laplacian_rows_with_frames`]); the film step passes the frames it
+    /// built for the transitions instead of recomputing them.
+    pub fn assemble_with_frames(
+        nb: &Neighborhoods,
+        frames: &[Frame],
+        params: &MlsParams,
+    ) -> Result<JointLaplacian, MlsError> {
+        let (rows, stats) = laplacian_rows_with_frames(nb, frames, params)?;
+        JointLaplacian::from_rows(nb, rows, stats)
+    }
+
+    /// The matrix of rows already computed on `nb` (e.g. by [`row_entries`]
+    /// inside another pass over the same fits).
+    pub fn from_rows(
+        nb: &Neighborhoods,
+        rows: Rows,
+        stats: FitStats,
+    ) -> Result<JointLaplacian, MlsError> {
         let matrix = csr_from_rows(nb.len(), nb.len(), rows)?;
         Ok(JointLaplacian {
             n_sheet: nb.n_sheet,
@@ -264,6 +306,28 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn assembling_with_given_frames_gives_the_same_matrix() {
+        let x = flat_sheet();
+        let nb = Neighborhoods::sheet(&x, 0.16).unwrap();
+        let params = MlsParams::new(0.16);
+        let a = JointLaplacian::assemble(&nb, &params).unwrap();
+        // frames computed with other fit settings are the same frames
+        let frames = par_frames(
+            &nb,
+            &MlsParams {
+                order: 2,
+                sheet_weight_in_filament: 0.0,
+                ..params
+            },
+        );
+        let b = JointLaplacian::assemble_with_frames(&nb, &frames, &params).unwrap();
+        assert_eq!(a.matrix.val(), b.matrix.val());
+        assert_eq!(a.matrix.symbolic().col_idx(), b.matrix.symbolic().col_idx());
+        assert_eq!(a.stats, b.stats);
+        assert!(JointLaplacian::assemble_with_frames(&nb, &frames[1..], &params).is_err());
     }
 
     #[test]
