@@ -439,6 +439,18 @@ impl Sim {
                 }
                 let t1 = if last { t_end } else { self.time + dt };
                 rec.emitted += emit_jets(&self.jets, self.time, t1, &mut self.state) as u64;
+                // jets that are on during [t, t1) feed the liquid through their nozzle disk
+                self.params.inflow = self
+                    .jets
+                    .iter()
+                    .filter(|j| self.time < j.stop && t1 > j.start)
+                    .map(|j| crate::grid::Inflow {
+                        origin: j.origin,
+                        direction: j.direction,
+                        radius: j.radius,
+                        speed: j.speed,
+                    })
+                    .collect();
                 let info =
                     step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
                         SimError::Step {

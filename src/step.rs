@@ -110,6 +110,8 @@ pub struct StepParams {
     pub lo: Vec3,
     /// Domain box (m).
     pub hi: Vec3,
+    /// Jet inflow disks active in the coming substep (set by the frame loop).
+    pub inflow: Vec<crate::grid::Inflow>,
     /// Surface tension coupling (§7); `None` when σ = 0 and the scene has
     /// no sheet or filament particles (the plain projection runs).
     pub coupling: Option<CouplingParams>,
@@ -137,6 +139,7 @@ impl StepParams {
             margin: s.time.cfl.ceil() as usize + 2,
             lo: Vec3::from(s.domain.min),
             hi: Vec3::from(s.domain.max),
+            inflow: Vec::new(),
             coupling: (s.physics.surface_tension > 0.0).then(|| coupling_params(s)),
         }
     }
@@ -332,6 +335,8 @@ pub fn step(
         times.add("viscosity", 0.0); // skipped (μ = 0): reported as 0
         None
     };
+    // jet nozzles: the liquid enters through its emission disk at the jet's velocity
+    grid.set_inflow(&p.inflow);
     // 7: projection, or with surface tension the coupled solve of §7
     if let Some(cp) = &p.coupling {
         let c = coupling::solve(grid, solids, particles, cp, dt, p.margin + 1)?;

@@ -111,9 +111,10 @@ pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
         while e < entries.len() && entries[e].0 as usize == a && entries[e].1 as usize == s {
             e += 1;
         }
-        let sides = (!is_wall_face(g, s, a) && g.weight[a][s] >= MIN_OPEN)
-            .then(|| sys.face(g, a, s))
-            .flatten();
+        let sides =
+            (!is_wall_face(g, s, a) && g.weight[a][s] >= MIN_OPEN && !g.is_prescribed(a, s))
+                .then(|| sys.face(g, a, s))
+                .flatten();
         if let Some(sides) = sides {
             let total: Real = entries[k..e].iter().map(|t| t.3).sum();
             c.of_face[a][s] = c.faces.len() as u32;

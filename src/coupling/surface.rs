@@ -49,7 +49,22 @@ pub struct SurfaceCounts {
     pub rims: usize,
     /// Filament ends.
     pub buds: usize,
+    /// Rows dropped because their curvature exceeded [`MAX_CURVATURE_H`]/h
+    /// or their weights [`MAX_ROW_WEIGHT_H2`]/h².
+    #[serde(default)]
+    pub curvature_clamps: usize,
 }
+
+/// Largest Σ_j |L_ij| h² of a tension row. On a resolved sheet the rows
+/// sum to 10–13 (resting droplet, R = 4–8 Δx); the first rings of a jet's
+/// sheet layer gave a median of 3e3 and a maximum of 1e6, which made
+/// eq. (24) unsolvable (BiCGSTAB diverged with either method).
+pub const MAX_ROW_WEIGHT_H2: Real = 100.0;
+
+/// Largest curvature magnitude (times h) a tension row may have: a radius
+/// of curvature below h/8 (about a third of the particle spacing at Δx/3)
+/// is not resolved by the sampling.
+pub const MAX_CURVATURE_H: Real = 8.0;
 
 /// Everything eq. (21)–(22) needs of the sheet and filament particles, on
 /// the joint index.
@@ -204,7 +219,45 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
             _ => {}
         }
     }
-    let lap = JointLaplacian::assemble(&nb, &geom)?;
+    let mut lap = JointLaplacian::assemble(&nb, &geom)?;
+    // a fit through a degenerate neighbourhood (the first two rings of a
+    // jet's sheet layer, a thin ribbon) can be full rank and still give
+    // weights and a curvature far above what the sampling resolves; such a
+    // row would make the tension explode and the coupled system unsolvable.
+    // Its particle gets no tension this step (counted).
+    let kmax = MAX_CURVATURE_H / h;
+    let axes: Vec<crate::math::Mat3> = frames.iter().map(|f| f.axes).collect();
+    let (rp, bad): (Vec<usize>, Vec<bool>) = {
+        let m = lap.matrix.as_ref();
+        let rp = m.symbolic().row_ptr().to_vec();
+        let ci = m.symbolic().col_idx();
+        let v = m.val();
+        let bad = (0..n)
+            .map(|i| {
+                let mut lx = Vec3::zeros();
+                for k in rp[i]..rp[i + 1] {
+                    lx += nb.x[ci[k]] * v[k];
+                }
+                let t: Vec3 = axes[i].column(if i < n_sheet { 2 } else { 0 }).into();
+                let kn = if i < n_sheet {
+                    t.dot(&lx).abs()
+                } else {
+                    (lx - t * t.dot(&lx)).norm()
+                };
+                let weight: Real =
+                    v[rp[i]..rp[i + 1]].iter().map(|w| w.abs()).sum::<Real>() * h * h;
+                !(kn <= kmax && weight <= MAX_ROW_WEIGHT_H2)
+            })
+            .collect();
+        (rp, bad)
+    };
+    let vals = lap.matrix.val_mut();
+    for i in (0..n).filter(|&i| bad[i]) {
+        for v in &mut vals[rp[i]..rp[i + 1]] {
+            *v = 0.0;
+        }
+    }
+    counts.curvature_clamps = bad.iter().filter(|b| **b).count();
     Ok(Surface {
         mass: nb.store.iter().map(|&s| parts.mass[s]).collect(),
         u: nb.store.iter().map(|&s| parts.v[s]).collect(),

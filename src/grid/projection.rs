@@ -132,7 +132,9 @@ impl Poisson {
                 let mut clamps = 0;
                 for a in 0..3 {
                     let w_lo = g.weight[a][s];
-                    if w_lo > 0.0 && !skip(a, s) {
+                    if w_lo > 0.0 && g.is_prescribed(a, s) {
+                        rhs += w_lo * g.u[a][s];
+                    } else if w_lo > 0.0 && !skip(a, s) {
                         let n = g.neighbor(s, unit(a, -1));
                         rhs += w_lo * g.u[a][s];
                         match n.map(|n| index[n]) {
@@ -151,6 +153,10 @@ impl Poisson {
                     let w_hi = t.map_or(0.0, |t| g.weight[a][t]);
                     if w_hi > 0.0 {
                         let t = t.unwrap_or(0);
+                        if g.is_prescribed(a, t) {
+                            rhs -= w_hi * g.u[a][t];
+                            continue;
+                        }
                         if skip(a, t) {
                             continue;
                         }
@@ -232,6 +238,9 @@ impl Poisson {
                     let u = g.u[ax][s];
                     if is_wall_face(g, s, ax) || g.weight[ax][s] == 0.0 {
                         return (0.0, 0);
+                    }
+                    if g.is_prescribed(ax, s) {
+                        return (u, 1);
                     }
                     match self.face(g, ax, s) {
                         Some(f) => {
