@@ -191,10 +191,27 @@ pub fn step(
         if let Some(tp) = &prm.transitions {
             let was_filament: Vec<bool> =
                 film.codim.iter().map(|c| *c == Codim::Filament).collect();
+            // a sheet particle within h of a *moving* ring particle is attached
+            // to the ring, not at a free edge: it keeps its codimension. (With
+            // moving rings reseeding fills the gap that opens between ring and
+            // film with a row ~0.5 spacings from the ring; the ring particles
+            // beside it fall outside the π/6 cone along the axis, so the cone
+            // test took the new row for a rim and its rim force launched it.)
+            // Static rings are left to the cone test: the film of a pinched
+            // catenoid must be able to form a rim at them.
+            let pinned: Vec<bool> = (0..film.len())
+                .map(|i| {
+                    film.fixed[i]
+                        || (film.codim[i] == Codim::Sheet
+                            && nb.lists.of(i).iter().any(|&q| {
+                                film.fixed[q as usize] && film.v[q as usize].norm() > 0.0
+                            }))
+                })
+                .collect();
             info.transitions = update_codims(
                 &film.x,
                 &mut film.codim,
-                &film.fixed,
+                &pinned,
                 &axes,
                 |i| nb.lists.of(i),
                 tp,
