@@ -105,8 +105,8 @@ fn bursting_bubble_rim_retracts_at_the_taylor_culick_speed_past_40_ms() {
     assert!(text.contains("dx: 0.012 "), "preset dx line changed");
     let scene = tmp.path().join("bubble.yaml");
     std::fs::write(&scene, text).unwrap();
-    let (r0, sigma, rho, tau) = (0.0576, 5e-4, 1000.0, 1e-6);
-    let v_tc = (2.0 * sigma / (rho * tau) as f64).sqrt();
+    let (r0, sigma, rho, tau): (f64, f64, f64, f64) = (0.0576, 5e-4, 1000.0, 1e-6);
+    let v_tc: f64 = (2.0 * sigma / (rho * tau)).sqrt();
     let mut sim = Sim::open(
         &scene,
         &RunOptions {

@@ -2,14 +2,22 @@
 //!
 //! 1. advect: x += Δt u (fixed boundary particles move with their
 //!    prescribed velocity);
-//! 2. codimension update (§8) on the joint sheet + filament set;
-//! 3. reseeding (§9), new particles lifted onto the local MLS fit;
+//! 2. codimension update (§8) on the joint sheet + filament set, then two
+//!    counted guards: filament clumps (PCA λ₂ > `clump_ratio` λ₁) become
+//!    points, sheet particles that span no plane become filaments (points
+//!    when they have no neighbour at all);
+//! 3. reseeding (§9), new particles lifted onto the local MLS fit; filament
+//!    insertion only along line-like filament frames;
 //! 4. control areas (Appendix D), thickness/radius from mass, explicit
 //!    forces: gravity, air drag, wind, enclosed gas, rim and bud tension
 //!    (§6); points move ballistically;
 //! 5. viscosity (§5, eq. 13) with the joint Laplacian, only when μ > 0;
 //! 6. semi-implicit surface tension (eq. 16) on the joint Laplacian with
 //!    the sheet weight in filament fits set to 0 (§7).
+//!
+//! Neighbourhoods and frames are built once after advection; stages 4–6
+//! reuse them (and the Laplacian rows of the reseeding's fit pass) when
+//! stages 2–3 changed nothing, and rebuild them once otherwise.
 //!
 //! The step works on a sub-store of the sheet and filament particles in
 //! joint order (sheets then filaments) so that neighbour lists, frames and
@@ -36,6 +44,7 @@ use crate::tension::{
 use crate::transition::update_codims;
 use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
+use std::cmp::Ordering;
 use std::time::Instant;
 
 /// What stage 2 built and stages 4–6 may reuse.
@@ -182,10 +191,27 @@ pub fn step(
         if let Some(tp) = &prm.transitions {
             let was_filament: Vec<bool> =
                 film.codim.iter().map(|c| *c == Codim::Filament).collect();
+            // a sheet particle within h of a *moving* ring particle is attached
+            // to the ring, not at a free edge: it keeps its codimension. (With
+            // moving rings reseeding fills the gap that opens between ring and
+            // film with a row ~0.5 spacings from the ring; the ring particles
+            // beside it fall outside the π/6 cone along the axis, so the cone
+            // test took the new row for a rim and its rim force launched it.)
+            // Static rings are left to the cone test: the film of a pinched
+            // catenoid must be able to form a rim at them.
+            let pinned: Vec<bool> = (0..film.len())
+                .map(|i| {
+                    film.fixed[i]
+                        || (film.codim[i] == Codim::Sheet
+                            && nb.lists.of(i).iter().any(|&q| {
+                                film.fixed[q as usize] && film.v[q as usize].norm() > 0.0
+                            }))
+                })
+                .collect();
             info.transitions = update_codims(
                 &film.x,
                 &mut film.codim,
-                &film.fixed,
+                &pinned,
                 &axes,
                 |i| nb.lists.of(i),
                 tp,
@@ -224,7 +250,11 @@ pub fn step(
                     film.codim[i] = Codim::Point;
                     info.transitions.sheet_to_filament += 1;
                     info.transitions.filament_to_point += 1;
-                } else if n_sheet_nbrs < 3 || !(l2 >= prm.sheet_line_ratio * l1) {
+                } else if n_sheet_nbrs < 3
+                    || l2.partial_cmp(&(prm.sheet_line_ratio * l1)) == Some(Ordering::Less)
+                    || l2.is_nan()
+                    || l1.is_nan()
+                {
                     film.codim[i] = Codim::Filament;
                     info.transitions.sheet_to_filament += 1;
                 }
@@ -235,10 +265,9 @@ pub fn step(
         let t = Instant::now();
         let mut rows = None;
         if let Some(rp) = &prm.reseed {
-            // one fit pass gives the reseeding's local shapes and the rows of
-            // the tension Laplacian (used if the set does not change)
-            // (rows only when the transitions left the set alone: otherwise
-            // the set changes anyway and the rows would be thrown away)
+            // one fit pass gives the reseeding's local shapes and, when the
+            // transitions left the set alone, the rows of the tension
+            // Laplacian (used if the reseeding changes nothing either)
             let christoffel = geom_mls.christoffel;
             let speculate = info.transitions.total() == 0;
             let (both, stats) = par_fit_map(&nb, &frames, &geom_mls, |_, f| {
