@@ -113,6 +113,7 @@ fn bursting_bubble_rim_retracts_at_the_taylor_culick_speed_past_40_ms() {
             out_root: Some(tmp.path().to_path_buf()),
             frames: Some(6),
             resume: false,
+            scale: None,
         },
     )
     .unwrap();

@@ -62,6 +62,7 @@ fn open(dir: &Path, yaml: &str) -> Sim {
             out_root: Some(dir.to_path_buf()),
             frames: None,
             resume: false,
+            scale: None,
         },
     )
     .unwrap()
