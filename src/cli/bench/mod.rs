@@ -6,6 +6,7 @@ mod coupling;
 mod films;
 mod neighbors;
 mod operators;
+mod scenes;
 mod surface;
 mod volume;
 
@@ -30,6 +31,8 @@ enum BenchTarget {
     Coupling(coupling::CouplingArgs),
     /// Run time against error: l = 2 droplet oscillation period against Rayleigh's.
     Accuracy(accuracy::AccuracyArgs),
+    /// Liquid presets at the paper's resolution: s/frame per stage against issue 5's targets.
+    Scenes(scenes::ScenesArgs),
     /// Surfacer on a ~860k-particle blob: time, peak memory, triangles (and splashsurf if on PATH).
     Surface(surface::SurfaceBenchArgs),
 }
@@ -44,5 +47,6 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
         BenchTarget::Films(x) => films::run(x),
         BenchTarget::Coupling(x) => coupling::run(x),
         BenchTarget::Accuracy(x) => accuracy::run(x),
+        BenchTarget::Scenes(x) => scenes::run(x),
     }
 }
