@@ -484,11 +484,7 @@ impl Sim {
                     rec.surface = c.counts;
                     rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
                 }
-                let (a, b) = (&mut rec.transitions, &info.transitions);
-                a.volume_to_sheet += b.volume_to_sheet;
-                a.sheet_to_volume += b.sheet_to_volume;
-                a.sheet_to_filament += b.sheet_to_filament;
-                a.filament_to_point += b.filament_to_point;
+                rec.transitions.add(&info.transitions);
                 rec.liquid_volume = info.liquid_volume;
                 rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
                 rec.blocks = rec.blocks.max(info.blocks);

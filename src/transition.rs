@@ -150,6 +150,31 @@ pub struct TransitionCounts {
 }
 
 impl TransitionCounts {
+    /// Writes the new codimensions `next` over `codim` and counts the
+    /// transitions among them.
+    pub fn apply(codim: &mut [Codim], next: Vec<Codim>) -> TransitionCounts {
+        let mut n = TransitionCounts::default();
+        for (c, nc) in codim.iter_mut().zip(next) {
+            match (*c, nc) {
+                (Codim::Volume, Codim::Sheet) => n.volume_to_sheet += 1,
+                (Codim::Sheet, Codim::Volume) => n.sheet_to_volume += 1,
+                (Codim::Sheet, Codim::Filament) => n.sheet_to_filament += 1,
+                (Codim::Filament, Codim::Point) => n.filament_to_point += 1,
+                _ => {}
+            }
+            *c = nc;
+        }
+        n
+    }
+
+    /// Adds the counts of `o` (frame totals over substeps).
+    pub fn add(&mut self, o: &TransitionCounts) {
+        self.volume_to_sheet += o.volume_to_sheet;
+        self.sheet_to_volume += o.sheet_to_volume;
+        self.sheet_to_filament += o.sheet_to_filament;
+        self.filament_to_point += o.filament_to_point;
+    }
+
     /// Total number of events.
     pub fn total(&self) -> u64 {
         self.volume_to_sheet
@@ -246,18 +271,7 @@ pub fn update_codims<'a>(
         .into_par_iter()
         .map(|p| new_codim(p, &frames[p], x, old, fixed, nbrs(p), prm))
         .collect();
-    let mut n = TransitionCounts::default();
-    for (c, nc) in codim.iter_mut().zip(next) {
-        match (*c, nc) {
-            (Codim::Volume, Codim::Sheet) => n.volume_to_sheet += 1,
-            (Codim::Sheet, Codim::Volume) => n.sheet_to_volume += 1,
-            (Codim::Sheet, Codim::Filament) => n.sheet_to_filament += 1,
-            (Codim::Filament, Codim::Point) => n.filament_to_point += 1,
-            _ => {}
-        }
-        *c = nc;
-    }
-    n
+    TransitionCounts::apply(codim, next)
 }
 
 #[cfg(test)]

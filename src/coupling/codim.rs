@@ -108,18 +108,7 @@ pub fn update(
             }
         })
         .collect();
-    let mut n = TransitionCounts::default();
-    for (c, nc) in parts.codim.iter_mut().zip(next) {
-        match (*c, nc) {
-            (Codim::Volume, Codim::Sheet) => n.volume_to_sheet += 1,
-            (Codim::Sheet, Codim::Volume) => n.sheet_to_volume += 1,
-            (Codim::Sheet, Codim::Filament) => n.sheet_to_filament += 1,
-            (Codim::Filament, Codim::Point) => n.filament_to_point += 1,
-            _ => {}
-        }
-        *c = nc;
-    }
-    n
+    TransitionCounts::apply(&mut parts.codim, next)
 }
 
 #[cfg(test)]

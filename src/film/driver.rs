@@ -160,11 +160,7 @@ pub fn advance(
                     .add(si.iterations as u32, si.rel_residual, true);
             }
         }
-        let (a, b) = (&mut rec.transitions, &info.transitions);
-        a.volume_to_sheet += b.volume_to_sheet;
-        a.sheet_to_volume += b.sheet_to_volume;
-        a.sheet_to_filament += b.sheet_to_filament;
-        a.filament_to_point += b.filament_to_point;
+        rec.transitions.add(&info.transitions);
         let (a, b) = (&mut rec.reseed, &info.reseed);
         a.sheet_inserted += b.sheet_inserted;
         a.sheet_removed += b.sheet_removed;

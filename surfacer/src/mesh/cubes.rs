@@ -127,23 +127,7 @@ pub(super) fn mc_table() -> &'static [Vec<[u8; 3]>; 256] {
 /// exactly; its velocity is interpolated linearly along the edge.
 pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
     let table = mc_table();
-    let mut blocks: Vec<[i32; 3]> = ls
-        .leaves
-        .iter()
-        .map(|l| l.origin)
-        .chain(ls.inside.iter().copied())
-        .flat_map(|o| {
-            (0..8).map(move |s| {
-                [
-                    o[0] - LEAF_DIM * (s >> 2 & 1),
-                    o[1] - LEAF_DIM * (s >> 1 & 1),
-                    o[2] - LEAF_DIM * (s & 1),
-                ]
-            })
-        })
-        .collect();
-    blocks.par_sort_unstable();
-    blocks.dedup();
+    let blocks = mesh_blocks(ls);
     let h = ls.voxel;
     const E: usize =
         (LEAF_DIM as usize + 1) * (LEAF_DIM as usize + 1) * (LEAF_DIM as usize + 1) * 3;

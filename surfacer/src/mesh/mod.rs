@@ -222,8 +222,10 @@ fn edge_key(g: [i32; 3], d: [i32; 3]) -> u64 {
 /// One block's vertices (edge key, position, velocity) and triangles (local indices).
 type BlockMesh = (Vec<(u64, [f32; 3], [f32; 3])>, Vec<[u32; 3]>);
 
-/// Extracts the zero crossing of `ls` as a triangle mesh.
-pub fn marching_tets(ls: &LevelSet) -> TriMesh {
+/// Origins of the leaf-sized blocks to mesh: every leaf and interior tile
+/// and its seven lower neighbours (a cube straddling a block boundary is
+/// meshed by the block of its lower corner), sorted and unique.
+fn mesh_blocks(ls: &LevelSet) -> Vec<[i32; 3]> {
     let mut blocks: Vec<[i32; 3]> = ls
         .leaves
         .iter()
@@ -241,6 +243,12 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
         .collect();
     blocks.par_sort_unstable();
     blocks.dedup();
+    blocks
+}
+
+/// Extracts the zero crossing of `ls` as a triangle mesh.
+pub fn marching_tets(ls: &LevelSet) -> TriMesh {
+    let blocks = mesh_blocks(ls);
     let h = ls.voxel;
     let parts: Vec<BlockMesh> = blocks
         .par_iter()
