@@ -178,6 +178,11 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             max_iterations: s.solver.pressure_max_iterations,
         },
         verify: false,
+        face_mass: match s.coupling.face_mass {
+            crate::scene::FaceMassSetting::Sheet => coupling::FaceMass::Sheet,
+            crate::scene::FaceMassSetting::LevelSet => coupling::FaceMass::LevelSet,
+        },
+        surface_radius: s.solver.surface_radius,
         transitions: s.film.transitions.then(|| TransitionParams::paper(h)),
         sources: s
             .jets

@@ -39,6 +39,10 @@ pub struct Constraints {
     pub sides: Vec<FaceSides>,
     /// Open fraction w_f of each face.
     pub weight: Vec<Real>,
+    /// Liquid fraction of each face's control volume: the share of the
+    /// face mass ρΔx³w_f that the sheet drags ([`Constraints::set_mass`]);
+    /// the ghost-fluid θ until set.
+    pub mass: Vec<Real>,
     /// J in compressed rows: `col[ptr[f]..ptr[f+1]]` are sheet particles
     /// (joint index), `val` their weights (each row sums to 1).
     pub ptr: Vec<usize>,
@@ -70,6 +74,35 @@ impl Constraints {
     pub fn interpolate(&self, f: usize, u: &[Vec3]) -> Real {
         let a = self.faces[f].0;
         self.row(f).map(|(i, w)| w * u[i][a]).sum()
+    }
+
+    /// Measures each face's liquid fraction from a level set that ends at the
+    /// sheet instead of the pressure solve's: ψ = φ + `shift` at the two cell
+    /// centres beside the face (φ of `sys`, extended into solids), and
+    /// θ_m = 1 (both inside), 0 (both outside) or ψ_in/(ψ_in − ψ_out).
+    ///
+    /// With `shift` = kΔx − s/2 (k the level-set radius of the volume
+    /// particles, s their spacing) ψ's zero crossing sits half a spacing
+    /// outside the outermost volume layer, where the sheet layer's own mass
+    /// begins: the liquid past the sheet, which the pressure solve needs for
+    /// Young–Laplace, no longer joins the sheet's inertia.
+    pub fn set_mass(&mut self, g: &MacGrid, sys: &Poisson, shift: Real) {
+        let psi = |t: Option<usize>| t.map_or(g.dx, |t| sys.phi[t]) + shift;
+        self.mass = self
+            .faces
+            .par_iter()
+            .map(|&(a, s)| {
+                let mut o = [0isize; 3];
+                o[a] = -1;
+                let (lo, hi) = (psi(g.neighbor(s, o)), psi(Some(s)));
+                match (lo < 0.0, hi < 0.0) {
+                    (true, true) => 1.0,
+                    (false, false) => 0.0,
+                    (true, false) => lo / (lo - hi),
+                    (false, true) => hi / (hi - lo),
+                }
+            })
+            .collect();
     }
 
     /// Constraint index of face (a, s).
@@ -120,6 +153,7 @@ pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
             c.of_face[a][s] = c.faces.len() as u32;
             c.faces.push((a, s));
             c.sides.push(sides);
+            c.mass.push(sides.theta);
             c.weight.push(g.weight[a][s]);
             for t in &entries[k..e] {
                 c.col.push(t.2);

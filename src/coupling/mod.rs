@@ -49,6 +49,20 @@ pub enum Method {
     Schur,
 }
 
+/// Which liquid fraction gives a constraint face its mass (eq. 19's M₍₀₎
+/// on the faces the sheet drives).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FaceMass {
+    /// The liquid ends at the sheet layer: the fraction below a level set
+    /// half a particle spacing outside the outermost volume particles.
+    #[default]
+    Sheet,
+    /// The ghost-fluid fraction of the pressure solve's level set, which
+    /// reaches `surface_radius` Δx past the volume particles.
+    LevelSet,
+}
+
 /// Parameters of the coupled solve.
 #[derive(Clone, Debug)]
 pub struct CouplingParams {
@@ -65,6 +79,10 @@ pub struct CouplingParams {
     pub transitions: Option<crate::transition::TransitionParams>,
     /// Jet nozzles, where transitions are suspended ([`codim::Source`]).
     pub sources: Vec<codim::Source>,
+    /// Mass of the constraint faces.
+    pub face_mass: FaceMass,
+    /// Level-set radius of the volume particles (× Δx), `solver.surface_radius`.
+    pub surface_radius: Real,
     /// Also evaluate the residual of the full eq. (24) for the solution
     /// (assembles the monolithic matrix when the Schur method ran).
     pub verify: bool,
@@ -166,7 +184,12 @@ pub fn solve(
     info.fits = surf.fits;
     let t = Instant::now();
     let full = Poisson::build(grid, solids, |_, _| false);
-    let k = faces::constraints(grid, &full, &surf.nb.x[..surf.n_sheet()]);
+    let mut k = faces::constraints(grid, &full, &surf.nb.x[..surf.n_sheet()]);
+    if prm.face_mass == FaceMass::Sheet {
+        if let Some(s) = volume_spacing(parts, prm.surface.density) {
+            k.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
+        }
+    }
     info.cells = full.cells.len();
     info.faces = k.len();
     info.theta_clamps = full.theta_clamps;
@@ -235,7 +258,7 @@ pub fn solve(
             }
         }
     }
-    let (form, sys, x) = attempt.expect("a solve succeeded or returned");
+    let (_, sys, x) = attempt.expect("a solve succeeded or returned");
     let q = &x[sys.qo..sys.qo + sys.nq];
     let u: Vec<Vec3> = (0..sys.np)
         .map(|i| {
@@ -246,23 +269,27 @@ pub fn solve(
             )
         })
         .collect();
-    // μ_f / θ_f: the impulse's velocity change on each constraint face
-    let dv: Vec<Real> = match form {
-        Form::Monolithic => (0..k.len())
-            .map(|f| x[sys.mo + f] / k.sides[f].theta)
-            .collect(),
-        Form::Reduced => (0..k.len())
-            .map(|f| {
-                let sd = k.sides[f];
-                let ql = sd.lo.map_or(0.0, |c| q[c as usize]);
-                let qh = sd.hi.map_or(0.0, |c| q[c as usize]);
-                k.interpolate(f, &u) - vstar[f] + (qh - ql) / sd.theta
-            })
-            .collect(),
-    };
+    // (Gq)_f and the velocity change that takes each constraint face from
+    // the pressure update of the ghost-fluid projection to (J u)_f
+    let gq: Vec<Real> = (0..k.len())
+        .map(|f| {
+            let sd = k.sides[f];
+            let ql = sd.lo.map_or(0.0, |c| q[c as usize]);
+            let qh = sd.hi.map_or(0.0, |c| q[c as usize]);
+            qh - ql
+        })
+        .collect();
+    let ju: Vec<Real> = (0..k.len()).map(|f| k.interpolate(f, &u)).collect();
+    let dv: Vec<Real> = (0..k.len())
+        .map(|f| ju[f] - vstar[f] + gq[f] / k.sides[f].theta)
+        .collect();
     info.interior_pressure = interior_pressure(&full, q, grid.dx, sc);
     if prm.verify {
-        info.eq24_residual = Some(eq24_residual(&full, &surf, &k, &vstar, sc, q, &u, &dv)?);
+        // μ_f = θ_f ((J u)_f − v**_f) + (Gq)_f from the face rows
+        let mu: Vec<Real> = (0..k.len())
+            .map(|f| system::mono_theta(&k, f) * (ju[f] - vstar[f]) + gq[f])
+            .collect();
+        info.eq24_residual = Some(eq24_residual(&full, &surf, &k, &vstar, sc, q, &u, &mu)?);
     }
     let mut valid = full.apply(grid, q, |a, s| k.index(a, s).map_or(0.0, |f| dv[f]));
     extrapolate(grid, &mut valid, layers);
@@ -279,6 +306,19 @@ pub fn solve(
     }
     write_back(parts, &surf, &u);
     Ok(info)
+}
+
+/// Spacing (m) of the volume particles, (m̄/ρ)^{1/3} from their mean mass;
+/// `None` without volume particles.
+fn volume_spacing(parts: &Particles, density: Real) -> Option<Real> {
+    let (mut m, mut n) = (0.0, 0usize);
+    for (c, mass) in parts.codim.iter().zip(&parts.mass) {
+        if *c == crate::particles::Codim::Volume {
+            m += mass;
+            n += 1;
+        }
+    }
+    (n > 0 && m > 0.0).then(|| (m / n as Real / density).cbrt())
 }
 
 /// Mean of p = q ρ Δx / Δt over cells with φ < −Δx.
@@ -343,7 +383,7 @@ fn solve_form(
 }
 
 /// ‖b − A x‖/‖b‖ of eq. (24) in the monolithic form for a solution given as
-/// (q, u, μ/θ).
+/// (q, u, μ).
 #[allow(clippy::too_many_arguments)]
 fn eq24_residual(
     full: &Poisson,
@@ -353,7 +393,7 @@ fn eq24_residual(
     sc: Scalars,
     q: &[Real],
     u: &[Vec3],
-    dv: &[Real],
+    mu: &[Real],
 ) -> Result<Real, CouplingError> {
     let sys = assemble(Form::Monolithic, full, surf, k, vstar, sc)
         .map_err(solve_err("eq. (24) residual"))?;
@@ -366,7 +406,7 @@ fn eq24_residual(
         }
     }
     for f in 0..k.len() {
-        x[sys.mo + f] = dv[f] * k.sides[f].theta;
+        x[sys.mo + f] = mu[f];
     }
     let mut ax = vec![0.0; a.nrows];
     a.matvec(&x, &mut ax);

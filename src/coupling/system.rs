@@ -15,10 +15,16 @@
 //!   Σ_c s_{c,f} (w_f/θ_f) q_c + (w_f/θ_f) μ_f − w_f (J u)_f = −w_f v**_f
 //!
 //! so that the face velocity after the solve is v_f = v**_f − (Gq)_f + μ_f/θ_f
-//! = (J u)_f: a face next to the free surface carries the liquid fraction θ
-//! of its mass (the ghost-fluid reading of M₍₀₎). The q–μ and u–μ blocks are
-//! each other's transposes, as in eq. (24); only the MLS Laplacian is
-//! non-symmetric. Fixed particles get identity rows.
+//! = (J u)_f: a constraint face carries the liquid fraction θ_f of its mass
+//! (M₍₀₎ of eq. 19). θ_f is [`Constraints::mass`]: the ghost-fluid fraction
+//! of the pressure's level set, or the fraction inside the sheet
+//! ([`Constraints::set_mass`]), bounded below by [`MASS_FLOOR`]; in the
+//! monolithic form the constraint faces' entries of A use the same
+//! θ_f (A is corrected from the pressure solve's ghost-fluid θ). At rest
+//! μ_f = −(Gq)_f whatever θ_f is, so θ_f changes the inertia, never the
+//! Young–Laplace jump. The q–μ and u–μ blocks are each other's transposes,
+//! as in eq. (24); only the MLS Laplacian is non-symmetric. Fixed particles
+//! get identity rows.
 //!
 //! Eliminating μ with the face rows (μ_f/θ_f = (Ju)_f − v**_f + (Gq)_f)
 //! leaves [q, u] with A' (A without the constraint faces: they become
@@ -33,6 +39,19 @@ use crate::grid::NONE;
 use crate::linsolve::{Csr, SolveError};
 use crate::math::{Real, Vec3};
 use faer::sparse::{SparseRowMat, Triplet};
+
+/// Smallest face-mass fraction. The monolithic form's face rows divide by
+/// it: a massless face outside the sheet would make entries of size
+/// w/θ → ∞ in A and in the μ block. The reduced form uses the same bound so
+/// that both forms solve the same equations.
+pub const MASS_FLOOR: Real = 0.02;
+
+/// θ_f of constraint face `f` (both forms use the same, so that they solve
+/// the same equations).
+#[inline]
+pub fn mono_theta(k: &Constraints, f: usize) -> Real {
+    k.mass[f].max(MASS_FLOOR)
+}
 
 /// Physical scalars of the solve.
 #[derive(Clone, Copy, Debug)]
@@ -165,9 +184,18 @@ pub fn assemble(
     for f in 0..k.len() {
         let a = k.faces[f].0;
         let w = k.weight[f];
-        let th = k.sides[f].theta;
         match form {
             Form::Monolithic => {
+                let th = mono_theta(k, f);
+                // A was built with the ghost-fluid θ on this face
+                let delta = w / th - w / k.sides[f].theta;
+                if delta != 0.0 {
+                    for (c1, s1) in face_cells(k, f) {
+                        for (c2, s2) in face_cells(k, f) {
+                            t.push(Triplet::new(qo + c1, qo + c2, s1 * s2 * delta));
+                        }
+                    }
+                }
                 let m = mo + f;
                 t.push(Triplet::new(m, m, w / th));
                 rhs[m] = -w * vstar[f];
@@ -184,6 +212,7 @@ pub fn assemble(
                 }
             }
             Form::Reduced => {
+                let th = mono_theta(k, f);
                 for (c, s) in face_cells(k, f) {
                     for (i, j) in k.row(f) {
                         let r = uo + 3 * i + a;

@@ -58,6 +58,22 @@ pub struct CouplingSettings {
     /// How the system is solved.
     #[serde(default)]
     pub method: CouplingMethod,
+    /// Which liquid fraction gives the constraint faces their mass:
+    /// `sheet` (the liquid ends at the sheet layer) or `level_set` (the
+    /// pressure solve's level set, which reaches past it).
+    #[serde(default)]
+    pub face_mass: FaceMassSetting,
+}
+
+/// `coupling.face_mass`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FaceMassSetting {
+    /// The liquid ends at the sheet layer (default).
+    #[default]
+    Sheet,
+    /// The pressure solve's level set.
+    LevelSet,
 }
 
 impl Default for CouplingSettings {
@@ -66,6 +82,7 @@ impl Default for CouplingSettings {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
             method: CouplingMethod::Monolithic,
+            face_mass: FaceMassSetting::Sheet,
         }
     }
 }

@@ -11,7 +11,7 @@
 //! `surface_radius` Δx around the volume particles (see `docs/decisions.md`
 //! for its effect on the Young–Laplace jump and on the oscillation).
 
-use crate::coupling::Method;
+use crate::coupling::{FaceMass, Method};
 use crate::grid::MacGrid;
 use crate::math::{Real, Vec3};
 use crate::particles::Codim;
@@ -33,6 +33,8 @@ pub struct DropletCase {
     pub surface_radius: Real,
     /// Coupled solve.
     pub method: Method,
+    /// Mass of the constraint faces.
+    pub face_mass: FaceMass,
     /// Relative elongation e along y of the l = 2 ellipsoid (volume
     /// preserving: y × (1 + e), x and z × (1 + e)^{-1/2}); 0 for a sphere.
     pub elongation: Real,
@@ -47,6 +49,7 @@ impl DropletCase {
             dx: 0.0128 / cells,
             surface_radius: 1.0,
             method: Method::Monolithic,
+            face_mass: FaceMass::Sheet,
             elongation: 0.0,
         }
     }
@@ -94,6 +97,7 @@ impl DropletCase {
         let mut prm = StepParams::from_scene(&scene);
         let mut cp = coupling_params(&scene);
         cp.method = self.method;
+        cp.face_mass = self.face_mass;
         prm.coupling = Some(cp);
         let grid = MacGrid::new(prm.lo, prm.hi, dx);
         Ok((SimState::new(parts, grid, solids), prm))
