@@ -162,6 +162,15 @@ pub fn sheet_half_thickness(m: Real, a: Real, rho: Real) -> Real {
     0.5 * m / (rho * a)
 }
 
+/// Radius (m) of the sphere of mass `m` (kg) at density `rho`: the largest
+/// half thickness of a sheet particle and the largest tube radius of a
+/// filament particle. A particle whose control area or length is so small
+/// that its thickness would exceed it is no longer thin (a crowded,
+/// degenerate neighbourhood); callers clamp to it and count the clamp.
+pub fn sphere_radius(m: Real, rho: Real) -> Real {
+    (3.0 * m / (4.0 * std::f64::consts::PI * rho)).cbrt()
+}
+
 /// Tube radius (m) of a filament particle of mass `m`, length `l`, density `rho`.
 pub fn filament_radius(m: Real, l: Real, rho: Real) -> Real {
     (m / (rho * std::f64::consts::PI * l)).sqrt()
@@ -249,6 +258,9 @@ mod tests {
         let m = rho * std::f64::consts::PI * r * r * l;
         assert!((filament_radius(m, l, rho) - r).abs() < 1e-15);
         assert!((sheet_half_thickness(rho * 1e-4 * 2e-6, 1e-4, rho) - 1e-6).abs() < 1e-18);
+        let r = 4.3e-4;
+        let m = rho * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        assert!((sphere_radius(m, rho) - r).abs() < 1e-15);
         assert_eq!(surface_tension_area(1.0, true), 2.0);
     }
 }

@@ -95,6 +95,19 @@ pub struct ReseedCounts {
     pub filament_skipped: u64,
 }
 
+impl ReseedCounts {
+    /// Adds another pass's counts.
+    pub fn add(&mut self, b: &ReseedCounts) {
+        self.sheet_inserted += b.sheet_inserted;
+        self.sheet_removed += b.sheet_removed;
+        self.filament_inserted += b.filament_inserted;
+        self.filament_removed += b.filament_removed;
+        self.absorbed += b.absorbed;
+        self.light_merged += b.light_merged;
+        self.filament_skipped += b.filament_skipped;
+    }
+}
+
 /// The local surface (sheets) or curve (filaments) of particle p in its own
 /// frame, as fitted by MLS: `height(p, ξ¹, ξ²)` returns ξ³ on a sheet, and
 /// `curve(p, ξ¹)` returns (ξ², ξ³) on a filament.

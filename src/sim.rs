@@ -485,6 +485,7 @@ impl Sim {
                     rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
                 }
                 rec.transitions.add(&info.transitions);
+                rec.reseed.add(&info.reseed);
                 rec.liquid_volume = info.liquid_volume;
                 rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
                 rec.blocks = rec.blocks.max(info.blocks);

@@ -35,7 +35,7 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// Stage names, in the order they run; every substep reports all of them.
-pub const STAGES: [&str; 11] = [
+pub const STAGES: [&str; 12] = [
     "body_force",
     "p2g",
     "viscosity",
@@ -47,6 +47,7 @@ pub const STAGES: [&str; 11] = [
     "g2p",
     "advect",
     "transition",
+    "reseed",
 ];
 
 /// Wall time per stage (s), accumulated.
@@ -184,6 +185,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
         },
         surface_radius: s.solver.surface_radius,
         transitions: s.film.transitions.then(|| TransitionParams::paper(h)),
+        reseed: s.film.reseed.then(|| crate::reseed::ReseedParams::paper(h)),
         sources: s
             .jets
             .iter()
@@ -239,6 +241,8 @@ pub struct SubstepInfo {
     pub coupling: Option<CouplingInfo>,
     /// Codimension transitions after the advection (§8).
     pub transitions: TransitionCounts,
+    /// Reseeding of the sheets and filaments after the transitions (§9).
+    pub reseed: crate::reseed::ReseedCounts,
     /// Viscosity solves (x, y, z), `None` when skipped (μ = 0).
     pub viscosity: Option<[SolveInfo; 3]>,
     /// Corrections during advection.
@@ -388,6 +392,19 @@ pub fn step(
         });
     } else {
         times.add("transition", 0.0);
+    }
+    // 3: reseeding (§9) of the sheets and filaments
+    if let Some((rp, cp)) = p
+        .coupling
+        .as_ref()
+        .and_then(|c| c.reseed.as_ref().map(|r| (r, c)))
+    {
+        info.reseed = timed(times, "reseed", || {
+            coupling::reseed::reseed_surface(particles, affine, rp, &cp.surface.mls, &cp.sources)
+        })
+        .map_err(|e| StepError::Coupling(CouplingError::Mls(e)))?;
+    } else {
+        times.add("reseed", 0.0);
     }
     let bad = count_non_finite(particles);
     if bad > 0 {

@@ -1,6 +1,6 @@
 //! Jets in the frame loop: emission per substep with exact layer times (the
 //! particle count after a frame is the number of layers emitted by then times
-//! the circle pattern), the per-frame `emitted` count in the manifest, resume
+//! the circle pattern, plus what reseeding inserted and removed), the per-frame `emitted` count in the manifest, resume
 //! byte-identical across emission, `--scale`, and `codimfx sim` without a
 //! scene running the built-in dripping preset.
 use codimfx::emitter::circle_pattern;
@@ -90,12 +90,16 @@ fn jets_emit_exact_layers_and_resume_byte_identically() {
     // frame 0 is empty (the jet starts at 10 ms); afterwards the count is
     // exactly the layers emitted by t = f / fps, and nothing after the stop
     assert_eq!(m.frames[0].counts.values().sum::<usize>(), 0);
-    let mut total = 0;
+    let (mut total, mut reseeded) = (0, 0i64);
     for (r, rb) in m.frames.iter().zip(&mb.frames) {
         total += r.emitted;
+        let c = &r.reseed;
+        reseeded += (c.sheet_inserted + c.filament_inserted) as i64
+            - (c.sheet_removed + c.filament_removed + c.absorbed + c.light_merged) as i64;
         assert_eq!(r.emitted, rb.emitted, "frame {}", r.frame);
+        // every particle was emitted, or inserted by reseeding (§9)
         let n: usize = r.counts.values().sum();
-        assert_eq!(n as u64, total, "frame {}", r.frame);
+        assert_eq!(n as i64, total as i64 + reseeded, "frame {}", r.frame);
         assert_eq!(
             total,
             jet.layers_by(r.time) * per_layer,
@@ -108,11 +112,14 @@ fn jets_emit_exact_layers_and_resume_byte_identically() {
     assert_eq!(total, (0.08 / jet.period()).ceil() as u64 * per_layer);
     assert_eq!(m.frames[6].emitted, 0);
     assert!(m.frames[1].emitted > 0 && m.frames[5].emitted > 0);
-    // mass = ρ s³ per particle; the liquid left the nozzle and fell
+    // emitted with mass ρ s³ per particle; reseeding redistributes it
+    // exactly; the liquid left the nozzle and fell
     let last = ply::read(&a.join("jet").join(ply::frame_name(6))).unwrap();
     let p = &last.particles;
     let m0 = 1000.0 * jet.spacing.powi(3);
-    assert!(p.mass.iter().all(|&m| (m - m0).abs() < 1e-18));
+    let mass: f64 = p.mass.iter().sum();
+    assert!((mass - m0 * total as f64).abs() < 1e-12 * mass, "{mass}");
+    assert!(p.mass.iter().all(|&m| m > 0.0));
     assert!(p.x.iter().all(|x| x.iter().all(|c| c.is_finite())));
     let ymean = p.x.iter().map(|x| x.y).sum::<f64>() / p.len() as f64;
     assert!(ymean < 0.07, "mean height {ymean}");

@@ -20,6 +20,7 @@
 
 pub mod codim;
 pub mod faces;
+pub mod reseed;
 pub mod surface;
 pub mod system;
 
@@ -77,7 +78,10 @@ pub struct CouplingParams {
     /// Codimension transitions after each advection (§8); `None` keeps
     /// every particle's codimension.
     pub transitions: Option<crate::transition::TransitionParams>,
-    /// Jet nozzles, where transitions are suspended ([`codim::Source`]).
+    /// Reseeding of the sheets and filaments after the transitions (§9);
+    /// `None` leaves the particle set alone.
+    pub reseed: Option<crate::reseed::ReseedParams>,
+    /// Jet nozzles, where transitions and reseeding are suspended ([`codim::Source`]).
     pub sources: Vec<codim::Source>,
     /// Mass of the constraint faces.
     pub face_mass: FaceMass,

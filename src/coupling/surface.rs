@@ -11,8 +11,8 @@
 //! (a waterbell's or a polygon's sheet) and has two faces (Appendix D).
 
 use crate::area::{
-    filament_areas, filament_length, filament_radius, sheet_half_thickness, surface_tension_area,
-    voronoi_area,
+    filament_areas, filament_length, filament_radius, sheet_half_thickness, sphere_radius,
+    surface_tension_area, voronoi_area,
 };
 use crate::math::{Real, Vec3};
 use crate::mls::operators::{par_frames, Neighborhoods};
@@ -53,6 +53,10 @@ pub struct SurfaceCounts {
     /// or their weights [`MAX_ROW_WEIGHT_H2`]/h².
     #[serde(default)]
     pub curvature_clamps: usize,
+    /// Sheet half thicknesses and filament radii clamped to the radius of
+    /// the particle's own sphere ([`sphere_radius`]).
+    #[serde(default)]
+    pub radius_clamps: usize,
 }
 
 /// Largest Σ_j |L_ij| h² of a tension row. On a resolved sheet the rows
@@ -164,6 +168,7 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
         .map(|i| {
             let s = nb.store[i];
             let m = parts.mass[s];
+            let rmax = sphere_radius(m, prm.density);
             let nbrs = nb.lists.of(i);
             if i < n_sheet {
                 let vor = voronoi_area(
@@ -175,7 +180,8 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
                     h,
                 );
                 let free = !on_volume[i];
-                let r = (free && vor > 0.0).then(|| sheet_half_thickness(m, vor, prm.density));
+                let r = (free && vor > 0.0)
+                    .then(|| sheet_half_thickness(m, vor, prm.density).min(rmax));
                 return (
                     surface_tension_area(vor, free),
                     Vec3::zeros(),
@@ -190,7 +196,7 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
                     .map(|&q| nb.x[q as usize]),
                 0.5 * h,
             );
-            let r = filament_radius(m, l, prm.density);
+            let r = filament_radius(m, l, prm.density).min(rmax);
             let a = filament_areas(r, l);
             let axes = &frames[i].axes;
             match filament_role(i, axes, &nb.x, &codim, nbrs, h, prm.bud_angle) {
@@ -258,6 +264,11 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
         }
     }
     counts.curvature_clamps = bad.iter().filter(|b| **b).count();
+    counts.radius_clamps = rows
+        .iter()
+        .zip(&nb.store)
+        .filter(|(r, &s)| r.2 == Some(sphere_radius(parts.mass[s], prm.density)))
+        .count();
     Ok(Surface {
         mass: nb.store.iter().map(|&s| parts.mass[s]).collect(),
         u: nb.store.iter().map(|&s| parts.v[s]).collect(),

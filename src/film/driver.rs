@@ -161,14 +161,7 @@ pub fn advance(
             }
         }
         rec.transitions.add(&info.transitions);
-        let (a, b) = (&mut rec.reseed, &info.reseed);
-        a.sheet_inserted += b.sheet_inserted;
-        a.sheet_removed += b.sheet_removed;
-        a.filament_inserted += b.filament_inserted;
-        a.filament_removed += b.filament_removed;
-        a.absorbed += b.absorbed;
-        a.light_merged += b.light_merged;
-        a.filament_skipped += b.filament_skipped;
+        rec.reseed.add(&info.reseed);
         rec.fallbacks.step_halvings += halvings as u64;
         if s.film.max_speed > 0.0 {
             for v in p.v.iter_mut() {

@@ -56,9 +56,9 @@ struct Kept {
 
 /// Local geometry of every joint particle, as a Taylor quadratic of its fit
 /// (scaled coordinates η = ξ/h): slope and second derivatives at η = 0.
-struct FittedShape {
-    h: Real,
-    geo: Vec<Option<([Real; 2], [Real; 3])>>,
+pub(crate) struct FittedShape {
+    pub(crate) h: Real,
+    pub(crate) geo: Vec<Option<([Real; 2], [Real; 3])>>,
 }
 
 impl LocalShape for FittedShape {
