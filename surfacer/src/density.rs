@@ -217,7 +217,7 @@ impl BlockIds {
 /// size `h`, in the *band blocks* only: blocks within `reach` (m) of a particle that is not deep
 /// (or within its kernel box and two voxels). Blocks that only deep kernels touch are recorded as
 /// interior (their voxels are ≥ ~0.6 r − kernel radius inside the liquid: f ≥ 1 − lattice noise).
-pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityField {
+pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> DensityField {
     let inv = 1.0 / h;
     let nk = k.center.len();
     let band = union_of_boxes(
@@ -283,9 +283,9 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
                 let ex = k.extent_of(i) * inv;
                 // centre in voxel units relative to the block; G in voxel units (q = Gv (x − c))
                 let c = k.center_of(i) * inv - ob;
-                let gs = k.g[i];
+                let gs = k.g_sym(i);
                 let amp = k.amp[i] as Real;
-                let v = vel[k.index[i] as usize];
+                let v = vel[k.index[i] as usize].map(|c| c as Real);
                 let lo = (c - ex).map(|x| (x.ceil() as i32).max(0));
                 let hi = (c + ex).map(|x| (x.floor() as i32).min(LEAF_DIM - 1));
                 let mut add = |x: i32, y: i32, z: i32, s2: Real| {
@@ -294,9 +294,9 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
                         let w = amp * t * t * t;
                         let n = ((x << 6) | (y << 3) | z) as usize;
                         f[n] += w;
-                        m[n][0] += w * v.x;
-                        m[n][1] += w * v.y;
-                        m[n][2] += w * v.z;
+                        m[n][0] += w * v[0];
+                        m[n][1] += w * v[1];
+                        m[n][2] += w * v[2];
                     }
                 };
                 if gs[1] == 0.0 && gs[2] == 0.0 && gs[4] == 0.0 && gs[0] == gs[3] && gs[0] == gs[5]

@@ -13,6 +13,7 @@
 //!
 //! The crate does not depend on the `codimfx` solver; it only knows the cache format.
 
+pub mod alloc;
 pub mod anisotropy;
 pub mod cache;
 pub mod density;
@@ -31,7 +32,9 @@ pub use cache::ParticleFrame;
 pub use error::SurfaceError;
 pub use levelset::LevelSet;
 pub use mesh::TriMesh;
-pub use pipeline::{surface_cache, surface_particles, FrameGeometry, SurfaceOptions};
+pub use pipeline::{
+    surface_cache, surface_frame, surface_particles, FrameGeometry, SurfaceOptions,
+};
 
 /// Floating-point type used for all geometry (positions in metres).
 pub type Real = f64;

@@ -187,30 +187,51 @@ pub fn redistance(
     let layers = band.ceil() as usize + 1;
     let limit = (band + 1.0) * h;
     for _ in 0..layers {
-        // create the neighbour leaves a front voxel on a leaf face can reach (sorted: deterministic)
-        let mut need: Vec<Key> = Vec::new();
-        for (li, fr) in front.iter().enumerate() {
-            if fr.iter().all(|&w| w == 0) {
-                continue;
-            }
-            let o = grid.leaves[li].origin;
-            // faces touched by the front (layout: word x, bit 8y + z)
-            let any = fr.iter().fold(0u64, |a, &w| a | w);
-            let lo = [fr[0] != 0, any & 0xFF != 0, any & Z0 != 0];
-            let hi = [fr[7] != 0, any >> 56 != 0, any & Z7 != 0];
-            for dx in -1i32..=1 {
-                for dy in -1i32..=1 {
-                    for dz in -1i32..=1 {
-                        let d = [dx, dy, dz];
-                        if (0..3).all(|a| d[a] == 0 || (d[a] < 0 && lo[a]) || (d[a] > 0 && hi[a]))
-                            && d != [0, 0, 0]
-                        {
-                            need.push([o[0] + 8 * dx, o[1] + 8 * dy, o[2] + 8 * dz]);
+        // create the neighbour leaves in which a front voxel on a leaf face gives some voxel a
+        // distance within the limit (exact: a voxel is set iff one of its set neighbours' closest
+        // points is within the limit, and every set voxel was once front); sorted: deterministic
+        let lim2 = (limit / (CP_UNIT * h)).powi(2);
+        let g = &grid;
+        let mut need: Vec<Key> = front
+            .par_iter()
+            .enumerate()
+            .filter(|(_, fr)| {
+                // faces touched by the front (layout: word x, bit 8y + z)
+                let any = fr.iter().fold(0u64, |a, &w| a | w);
+                fr[0] != 0 || fr[7] != 0 || any & (0xFF | (0xFF << 56) | Z0 | Z7) != 0
+            })
+            .flat_map_iter(|(li, fr)| {
+                let l = &g.leaves[li];
+                let o = l.origin;
+                let mut out: Vec<Key> = Vec::new();
+                for n in 0..LEAF_SIZE {
+                    if fr[n >> 6] >> (n & 63) & 1 == 0 {
+                        continue;
+                    }
+                    let k = voxel_of([0, 0, 0], n);
+                    if k.iter().all(|&c| c > 0 && c < 7) {
+                        continue;
+                    }
+                    let c = l.cp[n];
+                    for s in 0..27 {
+                        let d = [s / 9 - 1, s / 3 % 3 - 1, s % 3 - 1];
+                        let q = [k[0] + d[0], k[1] + d[1], k[2] + d[2]];
+                        if q.iter().all(|&x| (0..8).contains(&x)) {
+                            continue;
+                        }
+                        let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
+                        let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
+                        if d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767) {
+                            let key = leaf_origin([o[0] + q[0], o[1] + q[1], o[2] + q[2]]);
+                            if !g.index.contains_key(&key) && out.last() != Some(&key) {
+                                out.push(key);
+                            }
                         }
                     }
                 }
-            }
-        }
+                out
+            })
+            .collect();
         need.sort_unstable();
         need.dedup();
         for k in need {
@@ -327,9 +348,12 @@ pub fn redistance(
             }
         }
     }
-    // leaves the band never reached hold only ±background, which the signs give anyway
+    // leaves the band never reached hold only ±background, which the signs give anyway; the
+    // closest points are no longer needed (3 of the 7 kB per leaf)
     drop(front);
     grid.leaves.retain(|l| l.set.iter().any(|&w| w != 0));
+    grid.leaves.par_iter_mut().for_each(|l| l.cp = Vec::new());
+    crate::alloc::trim();
     grid.index = grid
         .leaves
         .iter()

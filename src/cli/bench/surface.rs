@@ -156,21 +156,24 @@ fn which(name: &str) -> Option<std::path::PathBuf> {
     })
 }
 
-/// Runs splashsurf on the particles; returns (wall s, peak bytes, triangles if reported).
-fn run_splashsurf(bin: &Path, f: &ParticleFrame, radius: f64, dir: &Path) -> Result<(f64, u64)> {
-    let input = dir.join("blob.xyz");
-    let mut w = std::io::BufWriter::new(std::fs::File::create(&input)?);
+/// Writes the particles' positions as splashsurf's `.xyz` (f32 triples).
+fn write_xyz(f: &ParticleFrame, input: &Path) -> Result<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(input)?);
     for p in &f.pos {
         for c in [p.x, p.y, p.z] {
             w.write_all(&(c as f32).to_le_bytes())?;
         }
     }
     w.flush()?;
-    drop(w);
+    Ok(())
+}
+
+/// Runs splashsurf on the particles in `input` (`.xyz`); returns (wall s, peak bytes).
+fn run_splashsurf(bin: &Path, input: &Path, radius: f64, dir: &Path) -> Result<(f64, u64)> {
     let t = Instant::now();
     let mut child = Command::new(bin)
         .arg("reconstruct")
-        .arg(&input)
+        .arg(input)
         .arg("-o")
         .arg(dir.join("blob.ply"))
         .arg(format!("--particle-radius={radius}"))
@@ -195,6 +198,9 @@ fn run_splashsurf(bin: &Path, f: &ParticleFrame, radius: f64, dir: &Path) -> Res
 
 /// Runs the benchmark and prints a markdown table.
 pub fn run(a: SurfaceBenchArgs) -> Result<()> {
+    // large stage buffers go back to the system when freed (surfacer::alloc), as in
+    // `codimfx surface`
+    surfacer::alloc::return_freed_memory();
     let t = Instant::now();
     let f = blob(&a);
     let gen = t.elapsed().as_secs_f64();
@@ -220,15 +226,31 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
     } else {
         &[true]
     };
+    // splashsurf's input is written now: the frame is handed over to the surfacer (as
+    // `codimfx surface` does with each frame it reads), which frees it after taking the volume
+    // particles' data
+    let splash = which("splashsurf");
+    let dir = tempfile_dir()?;
+    let xyz = dir.join("blob.xyz");
+    if splash.is_some() {
+        write_xyz(&f, &xyz)?;
+    }
+    let n_volume = f.codim.iter().filter(|&&c| c == 0).count();
+    let mut f = Some(f);
     let mut ours = (0.0, 0);
-    for &aniso in modes {
+    for (m, &aniso) in modes.iter().enumerate() {
+        let frame = if m + 1 == modes.len() {
+            f.take().expect("frame")
+        } else {
+            f.clone().expect("frame")
+        };
         let mut o = SurfaceOptions {
             voxel_size: Some(radius),
             ..Default::default()
         };
         o.aniso.anisotropic = aniso;
         let t = Instant::now();
-        let g = surfacer::surface_particles(&f, &o)?;
+        let g = surfacer::surface_frame(frame, &o)?;
         let mut total = t.elapsed().as_secs_f64();
         let mut wt = 0.0;
         if let Some(dir) = &a.write {
@@ -240,7 +262,7 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
         }
         let peak = peak_rss("self").unwrap_or(0);
         let st = &g.stats;
-        let pvol = f.codim.iter().filter(|&&c| c == 0).count() as f64 * a.spacing.powi(3);
+        let pvol = n_volume as f64 * a.spacing.powi(3);
         println!(
             "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {:+.2} % |",
             if aniso { "anisotropic" } else { "isotropic" },
@@ -272,10 +294,9 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
             ours = (total, peak);
         }
     }
-    match which("splashsurf") {
+    match splash {
         Some(bin) => {
-            let dir = tempfile_dir()?;
-            let (ts, ps) = run_splashsurf(&bin, &f, radius, &dir)?;
+            let (ts, ps) = run_splashsurf(&bin, &xyz, radius, &dir)?;
             let _ = std::fs::remove_dir_all(&dir);
             println!(
                 "\nsplashsurf (isotropic): {ts:.2} s, peak RSS {:.0} MB",
@@ -288,6 +309,7 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
             );
         }
         None => {
+            let _ = std::fs::remove_dir_all(&dir);
             println!("\nsplashsurf: not on PATH, comparison skipped (cargo install splashsurf)")
         }
     }

@@ -412,6 +412,7 @@ fn merge_blocks(parts: Vec<BlockMesh>) -> TriMesh {
         }
         tris.extend(t.iter().map(|t| t.map(|i| i + off)));
     }
+    crate::alloc::trim();
     keys.par_sort_unstable();
     let mut remap = vec![0u32; nv];
     let mut pos = Vec::new();
