@@ -77,6 +77,21 @@ impl DensityField {
     }
 }
 
+/// ⌈x⌉ as an integer without a libm call (x86-64's baseline has no `roundsd`): exact for
+/// |x| < 2³¹; NaN gives 0 like `x.ceil() as i32`. Used for row bounds in block-local voxel units.
+#[inline]
+fn ceil_i(x: Real) -> i32 {
+    let i = x as i32;
+    i + ((i as Real) < x) as i32
+}
+
+/// ⌊x⌋ as an integer, see [`ceil_i`].
+#[inline]
+fn floor_i(x: Real) -> i32 {
+    let i = x as i32;
+    i - ((i as Real) > x) as i32
+}
+
 /// Block-index box (origins / 8, inclusive) overlapped by the box `c ± e` (voxel size `1/inv`).
 fn block_box(c: Vec3, e: Vec3, inv: Real) -> ([i32; 3], [i32; 3]) {
     let lo: [i32; 3] = ((c - e) * inv).map(|x| x.ceil() as i32 >> 3).into();
@@ -286,8 +301,8 @@ pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> Density
                 let gs = k.g_sym(i);
                 let amp = k.amp[i] as Real;
                 let v = vel[k.index[i] as usize].map(|c| c as Real);
-                let lo = (c - ex).map(|x| (x.ceil() as i32).max(0));
-                let hi = (c + ex).map(|x| (x.floor() as i32).min(LEAF_DIM - 1));
+                let lo = (c - ex).map(|x| ceil_i(x).max(0));
+                let hi = (c + ex).map(|x| floor_i(x).min(LEAF_DIM - 1));
                 let mut add = |x: i32, y: i32, z: i32, s2: Real| {
                     if s2 < 1.0 {
                         let t = 1.0 - s2;
@@ -313,8 +328,8 @@ pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> Density
                                 continue;
                             }
                             let zr = (r2 - rxy).sqrt();
-                            let z0 = ((c.z - zr).ceil() as i32).max(lo.z);
-                            let z1 = ((c.z + zr).floor() as i32).min(hi.z);
+                            let z0 = ceil_i(c.z - zr).max(lo.z);
+                            let z1 = floor_i(c.z + zr).min(hi.z);
                             for z in z0..=z1 {
                                 let dz = z as Real - c.z;
                                 add(x, y, z, s2 * (rxy + dz * dz));
@@ -345,8 +360,8 @@ pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> Density
                             continue;
                         }
                         let sd = disc.sqrt();
-                        let z0 = (((-qb - sd) / qa).ceil() as i32).max(lo.z);
-                        let z1 = (((-qb + sd) / qa).floor() as i32).min(hi.z);
+                        let z0 = ceil_i((-qb - sd) / qa).max(lo.z);
+                        let z1 = floor_i((-qb + sd) / qa).min(hi.z);
                         for z in z0..=z1 {
                             let q = u + gz * z as Real;
                             add(x, y, z, q.norm_squared());
@@ -383,9 +398,9 @@ pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> Density
                 if f[n] > 0.0 {
                     for a in 0..3 {
                         if vstep[a] > 0.0 {
-                            vq[n][a] = ((vo[n][a] - vmin[a]) / vstep[a])
-                                .round()
-                                .clamp(0.0, 65535.0) as u16;
+                            // non-negative: rounding by truncation of x + ½ (no libm call)
+                            vq[n][a] =
+                                ((vo[n][a] - vmin[a]) / vstep[a] + 0.5).clamp(0.0, 65535.0) as u16;
                         }
                     }
                 }

@@ -86,13 +86,31 @@ pub fn redistance(
         .filter(|(bi, _)| !no_seeds(*bi))
         .map(|(_, b)| {
             let mut out = Vec::new();
+            // the six face-neighbour blocks (slot 2a + (s > 0)), or their tile value
+            let face: [(Option<&crate::density::DensityBlock>, f32); 6] =
+                std::array::from_fn(|q| {
+                    let mut o = b.origin;
+                    o[q / 2] += if q % 2 == 0 { -8 } else { 8 };
+                    match d.index.get(&o) {
+                        Some(&j) => (Some(&d.blocks[j]), 0.0),
+                        None if d.interior.binary_search(&o).is_ok() => (None, 1.0),
+                        None => (None, 0.0),
+                    }
+                });
+            let fetch = |nb: Key, q: usize| -> f32 {
+                match face[q] {
+                    (Some(bl), _) => bl.f[voxel_index(nb)],
+                    (None, t) => t,
+                }
+            };
             for n in 0..LEAF_SIZE {
                 let ijk = voxel_of(b.origin, n);
                 let f = b.f[n];
                 let ins = f >= iso;
                 let mut inv2 = 0.0f64;
                 let mut grad = Vec3::zeros();
-                let mut vel = b.vel(n);
+                // voxel whose velocity the seed takes (itself, or across the crossing when f ≤ 0)
+                let mut vel_from: Option<(Key, usize)> = None;
                 let mut any = false;
                 for a in 0..3 {
                     let mut dmin = Real::INFINITY;
@@ -104,14 +122,14 @@ pub fn redistance(
                         let fnb = if (nb[a] & !7) == b.origin[a] {
                             b.f[voxel_index(nb)]
                         } else {
-                            d.f(nb)
+                            fetch(nb, 2 * a + si)
                         };
                         fs[si] = fnb;
                         if (fnb >= iso) != ins {
                             let t = ((f - iso) as Real / (f - fnb) as Real).clamp(0.0, 1.0);
                             dmin = dmin.min(t * h);
                             if f <= 0.0 {
-                                vel = d.vel(nb);
+                                vel_from = Some((nb, 2 * a + si));
                             }
                             any = true;
                         }
@@ -125,6 +143,11 @@ pub fn redistance(
                 if !any {
                     continue;
                 }
+                let vel = match vel_from {
+                    None => b.vel(n),
+                    Some((nb, q)) if (nb[q / 2] & !7) == b.origin[q / 2] => b.vel(voxel_index(nb)),
+                    Some((nb, q)) => face[q].0.map_or([0.0; 3], |bl| bl.vel(voxel_index(nb))),
+                };
                 let phi = (1.0 / inv2.sqrt()) * if ins { -1.0 } else { 1.0 };
                 let gn = grad.norm();
                 let flat = gn.is_nan() || gn <= 0.0;
@@ -203,7 +226,21 @@ pub fn redistance(
             .flat_map_iter(|(li, fr)| {
                 let l = &g.leaves[li];
                 let o = l.origin;
-                let mut out: Vec<Key> = Vec::new();
+                // neighbour leaves that exist (slot (dx+1)·9 + (dy+1)·3 + dz+1)
+                let mut exists = [false; 27];
+                for (sl, e) in exists.iter_mut().enumerate() {
+                    let d = [sl as i32 / 9 - 1, sl as i32 / 3 % 3 - 1, sl as i32 % 3 - 1];
+                    *e = sl == 13
+                        || g.index.contains_key(&[
+                            o[0] + 8 * d[0],
+                            o[1] + 8 * d[1],
+                            o[2] + 8 * d[2],
+                        ]);
+                }
+                let mut want = [false; 27];
+                if exists.iter().all(|&e| e) {
+                    return Vec::new();
+                }
                 for n in 0..LEAF_SIZE {
                     if fr[n >> 6] >> (n & 63) & 1 == 0 {
                         continue;
@@ -213,23 +250,38 @@ pub fn redistance(
                         continue;
                     }
                     let c = l.cp[n];
-                    for s in 0..27 {
-                        let d = [s / 9 - 1, s / 3 % 3 - 1, s % 3 - 1];
-                        let q = [k[0] + d[0], k[1] + d[1], k[2] + d[2]];
-                        if q.iter().all(|&x| (0..8).contains(&x)) {
-                            continue;
-                        }
-                        let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
-                        let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
-                        if d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767) {
-                            let key = leaf_origin([o[0] + q[0], o[1] + q[1], o[2] + q[2]]);
-                            if !g.index.contains_key(&key) && out.last() != Some(&key) {
-                                out.push(key);
+                    for dx in -1..=1i32 {
+                        for dy in -1..=1i32 {
+                            for dz in -1..=1i32 {
+                                let d = [dx, dy, dz];
+                                let side = |a: usize| {
+                                    let q = k[a] + d[a];
+                                    if q < 0 {
+                                        0
+                                    } else if q > 7 {
+                                        2
+                                    } else {
+                                        1
+                                    }
+                                };
+                                let sl = side(0) * 9 + side(1) * 3 + side(2);
+                                if exists[sl] || want[sl] {
+                                    continue;
+                                }
+                                let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
+                                let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
+                                want[sl] = d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767);
                             }
                         }
                     }
                 }
-                out
+                (0..27)
+                    .filter(|&sl| want[sl])
+                    .map(|sl| {
+                        let d = [sl as i32 / 9 - 1, sl as i32 / 3 % 3 - 1, sl as i32 % 3 - 1];
+                        [o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]]
+                    })
+                    .collect::<Vec<Key>>()
             })
             .collect();
         need.sort_unstable();

@@ -137,6 +137,20 @@ fn add_extras(f: &mut ParticleFrame, a: &SurfaceBenchArgs) {
     }
 }
 
+/// CPU seconds (user + system) of this process and of its waited-for children, from
+/// /proc/self/stat (clock ticks of 1/100 s, Linux's USER_HZ).
+fn cpu_times() -> (f64, f64) {
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // fields after the command name in parentheses: utime stime cutime cstime are 14–17
+    let rest = s.rsplit_once(')').map_or("", |r| r.1);
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .map(|x| x.parse::<f64>().unwrap_or(0.0))
+        .collect();
+    let at = |i: usize| f.get(i - 3).copied().unwrap_or(0.0) / 100.0;
+    (at(14) + at(15), at(16) + at(17))
+}
+
 /// Peak resident memory of a process (VmHWM, bytes), from /proc.
 fn peak_rss(pid: &str) -> Option<u64> {
     let s = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
@@ -237,7 +251,7 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
     }
     let n_volume = f.codim.iter().filter(|&&c| c == 0).count();
     let mut f = Some(f);
-    let mut ours = (0.0, 0);
+    let mut ours = (0.0, 0, 0.0);
     for (m, &aniso) in modes.iter().enumerate() {
         let frame = if m + 1 == modes.len() {
             f.take().expect("frame")
@@ -250,6 +264,7 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
         };
         o.aniso.anisotropic = aniso;
         let t = Instant::now();
+        let cpu0 = cpu_times().0;
         let g = surfacer::surface_frame(frame, &o)?;
         let mut total = t.elapsed().as_secs_f64();
         let mut wt = 0.0;
@@ -291,20 +306,27 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
             st.volume_shift
         );
         if aniso {
-            ours = (total, peak);
+            ours = (total, peak, cpu_times().0 - cpu0);
         }
     }
     match splash {
         Some(bin) => {
+            let c0 = cpu_times().1;
             let (ts, ps) = run_splashsurf(&bin, &xyz, radius, &dir)?;
+            let cs = cpu_times().1 - c0;
             let _ = std::fs::remove_dir_all(&dir);
             println!(
-                "\nsplashsurf (isotropic): {ts:.2} s, peak RSS {:.0} MB",
+                "\nsplashsurf (isotropic): {ts:.2} s, CPU {cs:.2} s, peak RSS {:.0} MB",
                 ps as f64 / 1e6
             );
             println!(
-                "codimfx anisotropic / splashsurf: time × {:.2}, memory × {:.2}",
+                "codimfx anisotropic: {:.2} s, CPU {:.2} s (user + system, surfacing and writing)",
+                ours.0, ours.2
+            );
+            println!(
+                "codimfx anisotropic / splashsurf: time × {:.2}, CPU × {:.2}, memory × {:.2}",
                 ours.0 / ts,
+                ours.2 / cs.max(0.01),
                 ours.1 as f64 / ps as f64
             );
         }
