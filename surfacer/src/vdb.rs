@@ -1,6 +1,7 @@
 //! OpenVDB writer for the level set (`surface`, FloatGrid, class `level set`) and its velocity
-//! (`v`, Vec3SGrid), in OpenVDB's own file format version 224 with a 5-4-3 tree and zip
-//! compression. vdb-rs only reads, and no maintained Rust crate writes VDB; the layout follows
+//! (`v`, Vec3SGrid), in OpenVDB's own file format version 224 with a 5-4-3 tree, zip and
+//! active-mask compression (leaf buffers hold their active values only, as OpenVDB writes level
+//! sets). vdb-rs only reads, and no maintained Rust crate writes VDB; the layout follows
 //! OpenVDB's `io/Archive.cc`, `io/Compression.h` and the node classes (facts in
 //! `shared/notes/vdb-format.md`, decision in `docs/decisions.md`).
 //!
@@ -23,6 +24,15 @@ use std::io::Write;
 use std::path::Path;
 
 const COMPRESS_ZIP: u32 = 1;
+/// `io::COMPRESS_ACTIVE_MASK`: leaf buffers may hold only their active values
+const COMPRESS_ACTIVE_MASK: u32 = 2;
+/// `io::Compression.h` per-buffer metadata: every inactive value is +background
+const NO_MASK_OR_INACTIVE_VALS: u8 = 0;
+/// every inactive value is −background
+const NO_MASK_AND_MINUS_BG: u8 = 1;
+/// inactive values are ±background, a selection mask (on: +background) follows
+const MASK_AND_NO_INACTIVE_VALS: u8 = 3;
+/// all 512 values follow
 const ALL_VALUES: u8 = 6;
 
 struct Out(Vec<u8>);
@@ -132,7 +142,7 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
     o.i64(0);
     o.i64(0);
     let grid_pos = o.0.len();
-    o.u32(COMPRESS_ZIP);
+    o.u32(COMPRESS_ZIP | COMPRESS_ACTIVE_MASK);
     // metadata
     let class = if kind == Kind::Surface {
         "level set"
@@ -226,13 +236,46 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
                     let leaf = &ls.leaves[l];
                     let mut b = Out(Vec::new());
                     b.mask(&leaf.active);
+                    let on = |n: usize| leaf.active[n >> 6] >> (n & 63) & 1 == 1;
+                    // OpenVDB's mask compression (what it writes for level sets itself): only the
+                    // active values, the inactive ones being ±background (a selection mask says
+                    // which) for φ and background (0) for the velocity
                     let raw = match kind {
-                        Kind::Surface => f32_bytes(leaf.phi.iter().copied()),
+                        Kind::Surface => {
+                            let (mut plus, mut minus, mut other) = (false, false, false);
+                            let mut sel = [0u64; 8];
+                            for n in (0..512).filter(|&n| !on(n)) {
+                                let v = leaf.phi[n];
+                                if v == bg {
+                                    plus = true;
+                                    sel[n >> 6] |= 1 << (n & 63);
+                                } else if v == -bg {
+                                    minus = true;
+                                } else {
+                                    other = true;
+                                }
+                            }
+                            if other {
+                                b.u8(ALL_VALUES);
+                                b.zipped(&f32_bytes(leaf.phi.iter().copied()));
+                                return b.0;
+                            }
+                            if plus && minus {
+                                b.u8(MASK_AND_NO_INACTIVE_VALS);
+                                b.mask(&sel);
+                            } else if minus {
+                                b.u8(NO_MASK_AND_MINUS_BG);
+                            } else {
+                                b.u8(NO_MASK_OR_INACTIVE_VALS);
+                            }
+                            f32_bytes((0..512).filter(|&n| on(n)).map(|n| leaf.phi[n]))
+                        }
                         Kind::Velocity => {
-                            f32_bytes((0..512).flat_map(|n| leaf.vel_at(n).unwrap_or([0.0; 3])))
+                            b.u8(NO_MASK_OR_INACTIVE_VALS);
+                            f32_bytes((0..512).filter_map(|n| leaf.vel_at(n)).flatten())
                         }
                     };
-                    b.values(&raw);
+                    b.zipped(&raw);
                     b.0
                 })
                 .collect();
