@@ -16,8 +16,7 @@
 use crate::hash::Key;
 use crate::levelset::LevelSet;
 use crate::SurfaceError;
-use flate2::write::ZlibEncoder;
-use flate2::Compression;
+use flate2::{Compress, Compression, FlushCompress, Status};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -62,12 +61,12 @@ impl Out {
             self.0.extend_from_slice(&w.to_le_bytes());
         }
     }
-    /// OpenVDB `zipToStream`: i64 size then zlib data, or −size then raw bytes.
-    fn zipped(&mut self, raw: &[u8]) {
-        let mut e = ZlibEncoder::new(Vec::new(), Compression::fast());
-        let z = e.write_all(raw).and_then(|_| e.finish());
-        match z {
-            Ok(z) if z.len() < raw.len() => {
+    /// OpenVDB `zipToStream`: i64 size then zlib data, or −size then raw bytes. `c` is a
+    /// compressor reused from buffer to buffer (its state is reset here; allocating a new one
+    /// per leaf cost a few hundred kB each).
+    fn zipped(&mut self, raw: &[u8], c: &mut Compress) {
+        match zlib(c, raw) {
+            Some(z) if z.len() < raw.len() => {
                 self.i64(z.len() as i64);
                 self.0.extend_from_slice(&z);
             }
@@ -79,7 +78,21 @@ impl Out {
     }
     fn values(&mut self, raw: &[u8]) {
         self.u8(ALL_VALUES);
-        self.zipped(raw);
+        self.zipped(raw, &mut Compress::new(Compression::fast(), true));
+    }
+}
+
+/// zlib stream of `raw` (None: the compressor failed or the result is not smaller).
+fn zlib(c: &mut Compress, raw: &[u8]) -> Option<Vec<u8>> {
+    c.reset();
+    let mut z = Vec::with_capacity(raw.len() / 2 + 64);
+    loop {
+        let done = c.total_in() as usize;
+        match c.compress_vec(&raw[done..], &mut z, FlushCompress::Finish) {
+            Ok(Status::StreamEnd) => return Some(z),
+            Ok(_) if z.len() < raw.len() => z.reserve(raw.len() / 2 + 64),
+            _ => return None,
+        }
     }
 }
 
@@ -232,52 +245,55 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
             // leaf buffers encoded in parallel, appended in order
             let bufs: Vec<Vec<u8>> = ls_sorted
                 .par_iter()
-                .map(|&l| {
-                    let leaf = &ls.leaves[l];
-                    let mut b = Out(Vec::new());
-                    b.mask(&leaf.active);
-                    let on = |n: usize| leaf.active[n >> 6] >> (n & 63) & 1 == 1;
-                    // OpenVDB's mask compression (what it writes for level sets itself): only the
-                    // active values, the inactive ones being ±background (a selection mask says
-                    // which) for φ and background (0) for the velocity
-                    let raw = match kind {
-                        Kind::Surface => {
-                            let (mut plus, mut minus, mut other) = (false, false, false);
-                            let mut sel = [0u64; 8];
-                            for n in (0..512).filter(|&n| !on(n)) {
-                                let v = leaf.phi[n];
-                                if v == bg {
-                                    plus = true;
-                                    sel[n >> 6] |= 1 << (n & 63);
-                                } else if v == -bg {
-                                    minus = true;
-                                } else {
-                                    other = true;
+                .map_init(
+                    || Compress::new(Compression::fast(), true),
+                    |c, &l| {
+                        let leaf = &ls.leaves[l];
+                        let mut b = Out(Vec::new());
+                        b.mask(&leaf.active);
+                        let on = |n: usize| leaf.active[n >> 6] >> (n & 63) & 1 == 1;
+                        // OpenVDB's mask compression (what it writes for level sets itself): only the
+                        // active values, the inactive ones being ±background (a selection mask says
+                        // which) for φ and background (0) for the velocity
+                        let raw = match kind {
+                            Kind::Surface => {
+                                let (mut plus, mut minus, mut other) = (false, false, false);
+                                let mut sel = [0u64; 8];
+                                for n in (0..512).filter(|&n| !on(n)) {
+                                    let v = leaf.phi[n];
+                                    if v == bg {
+                                        plus = true;
+                                        sel[n >> 6] |= 1 << (n & 63);
+                                    } else if v == -bg {
+                                        minus = true;
+                                    } else {
+                                        other = true;
+                                    }
                                 }
+                                if other {
+                                    b.u8(ALL_VALUES);
+                                    b.zipped(&f32_bytes(leaf.phi.iter().copied()), c);
+                                    return b.0;
+                                }
+                                if plus && minus {
+                                    b.u8(MASK_AND_NO_INACTIVE_VALS);
+                                    b.mask(&sel);
+                                } else if minus {
+                                    b.u8(NO_MASK_AND_MINUS_BG);
+                                } else {
+                                    b.u8(NO_MASK_OR_INACTIVE_VALS);
+                                }
+                                f32_bytes((0..512).filter(|&n| on(n)).map(|n| leaf.phi[n]))
                             }
-                            if other {
-                                b.u8(ALL_VALUES);
-                                b.zipped(&f32_bytes(leaf.phi.iter().copied()));
-                                return b.0;
-                            }
-                            if plus && minus {
-                                b.u8(MASK_AND_NO_INACTIVE_VALS);
-                                b.mask(&sel);
-                            } else if minus {
-                                b.u8(NO_MASK_AND_MINUS_BG);
-                            } else {
+                            Kind::Velocity => {
                                 b.u8(NO_MASK_OR_INACTIVE_VALS);
+                                f32_bytes((0..512).filter_map(|n| leaf.vel_at(n)).flatten())
                             }
-                            f32_bytes((0..512).filter(|&n| on(n)).map(|n| leaf.phi[n]))
-                        }
-                        Kind::Velocity => {
-                            b.u8(NO_MASK_OR_INACTIVE_VALS);
-                            f32_bytes((0..512).filter_map(|n| leaf.vel_at(n)).flatten())
-                        }
-                    };
-                    b.zipped(&raw);
-                    b.0
-                })
+                        };
+                        b.zipped(&raw, c);
+                        b.0
+                    },
+                )
                 .collect();
             for b in bufs {
                 o.0.extend_from_slice(&b);
