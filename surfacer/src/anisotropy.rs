@@ -57,8 +57,8 @@ impl Default for AnisoParams {
 pub const SIGMA_P: Real = 315.0 / (64.0 * std::f64::consts::PI);
 
 /// Per-particle kernels, structure of arrays, in cell order: kernel k belongs to particle
-/// `index[k]`. Stored in f32 (positions to ~1e-7 relative, far below a voxel; the density is
-/// evaluated in f64 from these).
+/// `index[k]`. Stored in f32 (positions to ~1e-7 relative, far below a voxel; the density rows
+/// take their coefficients in f64 from these).
 #[derive(Debug, Clone, Default)]
 pub struct Kernels {
     /// particle index of each kernel

@@ -5,8 +5,9 @@
 //! The field is computed block by block (8³ voxels, the level set's leaf size): each particle is
 //! binned into the blocks its kernel box touches, and every block sums its particles in index
 //! order — parallel over blocks and independent of the thread count. Only blocks some kernel
-//! touches exist; a block is kept at 16 bytes per voxel until the band is built. Blocks are stored
-//! inline in one vector, so dropping the field returns its memory to the system at once.
+//! touches exist; a block is kept at 10 bytes per voxel (f32 f, u16 velocities) until the band is
+//! built. Blocks are stored inline in one vector, so dropping the field returns its memory to the
+//! system at once.
 use crate::anisotropy::Kernels;
 use crate::hash::{FxMap, Key};
 use crate::levelset::{leaf_origin, voxel_index, LEAF_DIM, LEAF_SIZE};
