@@ -345,23 +345,41 @@ pub fn redistance(
                     let k = voxel_of([0, 0, 0], n);
                     // nearest closest point among the set neighbours, in voxel units
                     let mut best = (i64::MAX, [0i16; 3], 0u32);
-                    for dx in -1..=1 {
-                        for dy in -1..=1 {
-                            for dz in -1..=1 {
-                                let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
-                                    continue;
-                                };
-                                let lj = &g.leaves[j];
-                                if lj.is_set(m) {
-                                    let c = lj.cp[m];
-                                    let e = [
-                                        c[0] as i64 + dx as i64 * 4096,
-                                        c[1] as i64 + dy as i64 * 4096,
-                                        c[2] as i64 + dz as i64 * 4096,
-                                    ];
-                                    let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                                    if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
-                                        best = (d2, e.map(|v| v as i16), lj.src[m]);
+                    let mut consider = |lj: &WorkLeaf, m: usize, d: [i32; 3]| {
+                        let c = lj.cp[m];
+                        let e = [0, 1, 2].map(|a| c[a] as i64 + d[a] as i64 * 4096);
+                        let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                        if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
+                            best = (d2, e.map(|v| v as i16), lj.src[m]);
+                        }
+                    };
+                    if k.iter().all(|&c| c > 0 && c < 7) {
+                        // all 26 neighbours in this leaf, and only the front ones can win: a
+                        // voxel set before the previous layer had this candidate as a candidate
+                        // once (or its leaf was not needed) and was then farther than the limit,
+                        // so it cannot give a distance within the limit now. The front bits
+                        // around the voxel, 3 rows of 3 per x-word, in (dx, dy, dz) order
+                        let sh = 8 * (k[1] - 1) + (k[2] - 1);
+                        for dx in -1..=1 {
+                            let mut bits = (fr[li][(k[0] + dx) as usize] >> sh) & 0x07_0707;
+                            while bits != 0 {
+                                let b = bits.trailing_zeros() as i32;
+                                bits &= bits - 1;
+                                let (dy, dz) = (b / 8 - 1, b % 8 - 1);
+                                let m = (n as i32 + dx * 64 + dy * 8 + dz) as usize;
+                                consider(leaf, m, [dx, dy, dz]);
+                            }
+                        }
+                    } else {
+                        for dx in -1..=1 {
+                            for dy in -1..=1 {
+                                for dz in -1..=1 {
+                                    let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                                        continue;
+                                    };
+                                    let lj = &g.leaves[j];
+                                    if lj.is_set(m) {
+                                        consider(lj, m, [dx, dy, dz]);
                                     }
                                 }
                             }
