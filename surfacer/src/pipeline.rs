@@ -463,9 +463,10 @@ pub fn surface_cache(
     Ok(frames)
 }
 
-/// Bytes of peak memory per particle measured by `codimfx bench surface` (≈1.5 kB at voxel = Δ/2),
-/// with a safety factor.
-const BYTES_PER_PARTICLE: u64 = 2048;
+/// Bytes of peak memory per particle of one frame: `codimfx bench surface` measures ≈ 160 B
+/// (peak RSS 133–138 MB for 863 582 particles at voxel = Δ/2, frame included, docs/benchmarks.md
+/// round 3); ×3 for other shapes and finer voxels.
+const BYTES_PER_PARTICLE: u64 = 512;
 /// Bytes per particle in a cache file (docs/cache-format.md: 11 doubles, a uint and a uchar).
 const CACHE_BYTES_PER_PARTICLE: u64 = 11 * 8 + 4 + 1;
 
