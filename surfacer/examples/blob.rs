@@ -1,6 +1,10 @@
 //! Profiling harness: the `codimfx bench surface` blob (sphere r = 0.53 m on a 2×2×0.25 m slab,
 //! spacing 0.0125 m, jitter ±0.1) surfaced at voxel = particle radius; prints stage times, heap
-//! peak (counting allocator) and VmHWM. `cargo run --release -p surfacer --example blob [iso]`
+//! peak (counting allocator) and VmHWM. `cargo run --release -p surfacer --example blob [OUT_DIR]`
+//! (writes the outputs there too). Environment: `STAGES=1` heap peak per stage, `SAMPLE=1` RSS
+//! and heap every 20 ms, `BORROWED=1` `surface_particles` instead of handing the frame over,
+//! `DEFAULT_MALLOC=1` without `surfacer::alloc::return_freed_memory`, `DEBUG_DEEP=1` deep-particle
+//! histogram, `WRITE_XYZ=path` splashsurf's input only.
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
