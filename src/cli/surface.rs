@@ -59,6 +59,8 @@ fn parse_frames(s: &str) -> Result<(u32, u32)> {
 
 /// Runs `codimfx surface`.
 pub fn run(a: SurfaceArgs) -> Result<()> {
+    // large stage buffers go back to the system when freed (surfacer::alloc)
+    surfacer::alloc::return_freed_memory();
     let range = a.frames.as_deref().map(parse_frames).transpose()?;
     let mut o = SurfaceOptions {
         voxel_size: a.voxel_size,

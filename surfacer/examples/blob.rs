@@ -1,6 +1,10 @@
 //! Profiling harness: the `codimfx bench surface` blob (sphere r = 0.53 m on a 2×2×0.25 m slab,
 //! spacing 0.0125 m, jitter ±0.1) surfaced at voxel = particle radius; prints stage times, heap
-//! peak (counting allocator) and VmHWM. `cargo run --release -p surfacer --example blob [iso]`
+//! peak (counting allocator) and VmHWM. `cargo run --release -p surfacer --example blob [OUT_DIR]`
+//! (writes the outputs there too). Environment: `STAGES=1` heap peak per stage, `SAMPLE=1` RSS
+//! and heap every 20 ms, `BORROWED=1` `surface_particles` instead of handing the frame over,
+//! `DEFAULT_MALLOC=1` without `surfacer::alloc::return_freed_memory`, `DEBUG_DEEP=1` deep-particle
+//! histogram, `WRITE_XYZ=path` splashsurf's input only.
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -41,6 +45,9 @@ fn rand01(s: &mut u64) -> f64 {
 }
 
 fn main() {
+    if std::env::var("DEFAULT_MALLOC").is_err() {
+        surfacer::alloc::return_freed_memory();
+    }
     let dx = 0.0125;
     let (rad, side, th) = (0.53, 2.0, 0.25);
     let mut f = ParticleFrame::default();
@@ -89,18 +96,41 @@ fn main() {
     }
     let base = CUR.load(Ordering::Relaxed);
     PEAK.store(base, Ordering::Relaxed);
+    if std::env::var("SAMPLE").is_ok() {
+        // RSS against heap every 20 ms (where the resident peak is)
+        let t0 = Instant::now();
+        std::thread::spawn(move || loop {
+            let s = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+            let rss = s
+                .lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .unwrap_or("")
+                .to_string();
+            eprintln!(
+                "{:.2} s heap {:.0} MB {rss}",
+                t0.elapsed().as_secs_f64(),
+                CUR.load(Ordering::Relaxed) as f64 / 1e6
+            );
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        });
+    }
     let o = SurfaceOptions {
         voxel_size: Some(dx / 2.0),
         ..Default::default()
     };
+    let pvol = f.len() as f64 * dx * dx * dx;
+    let np = f.len();
     let t = Instant::now();
-    let g = surfacer::surface_particles(&f, &o).unwrap();
+    let g = if std::env::var("BORROWED").is_ok() {
+        surfacer::surface_particles(&f, &o).unwrap()
+    } else {
+        surfacer::surface_frame(f, &o).unwrap()
+    };
     let tot = t.elapsed().as_secs_f64();
     let st = &g.stats;
-    let pvol = f.len() as f64 * dx * dx * dx;
     println!(
         "{} particles: total {:.2} s, stages {:?}, heap peak {:.0} MB (input {:.0} MB), leaves {}, active {}, tris {}, verts {}, iso kernels {}, density blocks {}, vol err {:+.3} %",
-        f.len(),
+        np,
         tot,
         st.seconds.map(|x| (x * 100.0).round() / 100.0),
         PEAK.load(Ordering::Relaxed) as f64 / 1e6,
@@ -155,7 +185,8 @@ fn debug_deep(f: &ParticleFrame) {
     eprintln!("non-deep by depth (Δ) in the ball: {hist:?} of {tot:?}");
 }
 
-/// The pipeline's volume stages one by one, with the heap peak of each (MB).
+/// The pipeline's volume stages one by one (as `surface_frame` runs them), with the heap peak of
+/// each (MB).
 fn stages(f: &ParticleFrame) {
     let mb = |x: usize| x as f64 / 1e6;
     let mark = |what: &str| {
@@ -175,10 +206,19 @@ fn stages(f: &ParticleFrame) {
         .iter()
         .map(|p| 4.0 / 3.0 * std::f64::consts::PI * p.powi(3))
         .collect();
-    let k = surfacer::anisotropy::build_kernels(&f.pos, &vol, dx, &o.aniso);
+    let vel: Vec<[f32; 3]> = f
+        .vel
+        .iter()
+        .map(|v| [v.x as f32, v.y as f32, v.z as f32])
+        .collect();
+    let pos = f.pos.clone();
+    mark("extract (input still held)");
+    let base = CUR.load(Ordering::Relaxed);
+    let k = surfacer::anisotropy::build_kernels_owned(pos, &vol, dx, &o.aniso);
     mark("kernels");
-    let d = surfacer::density::rasterize(&k, &f.vel, h, 3.0 * dx + 2.0 * h);
+    let d = surfacer::density::rasterize(&k, &vel, h, 3.0 * dx + 2.0 * h);
     drop(k);
+    drop(vel);
     mark("density");
     let (mut grid, extra, signs, _) = surfacer::redistance::redistance(d, 0.5, 3.0);
     mark("redistance");
@@ -193,4 +233,8 @@ fn stages(f: &ParticleFrame) {
     let _ = surfacer::vdb::encode(&ls);
     mark("vdb encode");
     drop(m);
+    println!(
+        "(input held by this harness: {:.0} MB; subtract it from the stages after extract)",
+        mb(base - vol.len() * 8)
+    );
 }

@@ -57,20 +57,26 @@ impl Default for AnisoParams {
 pub const SIGMA_P: Real = 315.0 / (64.0 * std::f64::consts::PI);
 
 /// Per-particle kernels, structure of arrays, in cell order: kernel k belongs to particle
-/// `index[k]`. Stored in f32 (positions to ~1e-7 relative, far below a voxel; the density is
-/// evaluated in f64 from these).
+/// `index[k]`. Stored in f32 (positions to ~1e-7 relative, far below a voxel; the density rows
+/// take their coefficients in f64 from these).
 #[derive(Debug, Clone, Default)]
 pub struct Kernels {
     /// particle index of each kernel
     pub index: Vec<u32>,
     /// kernel centres x̄ (m)
     pub center: Vec<[f32; 3]>,
-    /// symmetric G matrices (1/m): xx, xy, xz, yy, yz, zz
+    /// shape of each kernel: an index into [`Self::g`] and [`Self::extent`], or [`PLAIN`] for the
+    /// plain isotropic kernel of radius h (G = I/h, extent h) that most deep particles have
+    pub shape: Vec<u32>,
+    /// symmetric G matrices (1/m): xx, xy, xz, yy, yz, zz, of the kernels that are not plain
     pub g: Vec<[f32; 6]>,
     /// σ_P det(G) · particle volume — the kernel's peak contribution to the volume fraction
     pub amp: Vec<f32>,
-    /// half extents of the kernel's axis-aligned bounding box (m)
+    /// half extents of the kernel's axis-aligned bounding box (m), of the kernels that are not
+    /// plain
     pub extent: Vec<[f32; 3]>,
+    /// G (1/m) and half extent (m) of the plain kernel
+    pub plain: ([f32; 6], [f32; 3]),
     /// deep particles: full, symmetric neighbourhood (see [`is_deep`]), ≳ 0.45 r from any free
     /// surface; the density is evaluated only near particles that are not deep
     pub deep: Vec<bool>,
@@ -88,16 +94,34 @@ impl Kernels {
     /// Half extents of kernel `i` in f64.
     #[inline]
     pub fn extent_of(&self, i: usize) -> Vec3 {
-        let c = self.extent[i];
+        let c = match self.shape[i] {
+            PLAIN => self.plain.1,
+            s => self.extent[s as usize],
+        };
         Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real)
+    }
+    /// Symmetric G of kernel `i` (xx, xy, xz, yy, yz, zz; 1/m).
+    #[inline]
+    pub fn g_sym(&self, i: usize) -> [f32; 6] {
+        match self.shape[i] {
+            PLAIN => self.plain.0,
+            s => self.g[s as usize],
+        }
     }
     /// G of kernel `i` in f64.
     #[inline]
     pub fn g_of(&self, i: usize) -> Mat3 {
-        let g = self.g[i].map(|x| x as Real);
+        let g = self.g_sym(i).map(|x| x as Real);
         Mat3::new(g[0], g[1], g[2], g[1], g[3], g[4], g[2], g[4], g[5])
     }
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.index.len() * (4 + 12 + 4 + 4 + 1) + self.g.len() * (24 + 12)
+    }
 }
+
+/// [`Kernels::shape`] of a plain kernel.
+pub const PLAIN: u32 = u32::MAX;
 
 /// Kernel support h = r/2 for spacing `dx`.
 pub fn kernel_radius(p: &AnisoParams, dx: Real) -> Real {
@@ -243,10 +267,17 @@ unsafe fn moments_sse2(
 
 /// Builds the kernels of the particles `pos` with volumes `vol` (m³) and spacing `dx` (m).
 pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> Kernels {
+    build_kernels_owned(pos.to_vec(), vol, dx, p)
+}
+
+/// [`build_kernels`] taking the positions over: they are freed once copied into cell order.
+pub fn build_kernels_owned(pos: Vec<Vec3>, vol: &[Real], dx: Real, p: &AnisoParams) -> Kernels {
     let r = p.radius_rel * dx;
     let h = kernel_radius(p, dx);
     let ks = p.ks_rel / (0.15 * r * r);
-    let grid = CellGrid::build(pos, r);
+    let n = pos.len();
+    let grid = CellGrid::build(&pos, r);
+    drop(pos);
     let sorted = grid.sorted();
     let cs = grid.cell_size();
     let r2 = (r * r) as f32;
@@ -314,8 +345,8 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
     // the kernel of the particle at sorted position k: (centre, G, amp, extent, isotropic, deep)
     type Rec = ([f32; 3], [f32; 6], f32, [f32; 3], bool, bool);
     let kernel_of = |cand: &mut Candidates, k: usize, i: usize| -> Rec {
-        let xi = pos[i];
-        let key = grid.cell_key(&sorted[k]);
+        let xi = sorted[k];
+        let key = grid.cell_key(&xi);
         if cand.cell != Some(key) {
             cand.cell = Some(key);
             cand.built = false;
@@ -398,33 +429,63 @@ pub fn build_kernels(pos: &[Vec3], vol: &[Real], dx: Real, p: &AnisoParams) -> K
     };
 
     // kernels stay in cell order (better locality for the density pass); `index` maps back.
-    let n = pos.len();
+    // Shapes that are not plain are collected per chunk of kernels and concatenated in chunk
+    // order (deterministic for any thread count).
+    const CHUNK: usize = 4096;
+    let plain = (sym(&(Mat3::identity() / h)), v3(&Vec3::repeat(h)));
     let mut k = Kernels {
         index: grid.order().to_vec(),
         center: vec![[0.0; 3]; n],
-        g: vec![[0.0; 6]; n],
+        shape: vec![PLAIN; n],
+        g: Vec::new(),
         amp: vec![0.0; n],
-        extent: vec![[0.0; 3]; n],
+        extent: Vec::new(),
+        plain,
         deep: vec![false; n],
         isotropic: 0,
     };
-    let mut iso_flag = vec![false; n];
-    k.center
-        .par_iter_mut()
-        .zip(k.g.par_iter_mut())
-        .zip(k.amp.par_iter_mut())
-        .zip(k.extent.par_iter_mut())
-        .zip(iso_flag.par_iter_mut())
-        .zip(k.deep.par_iter_mut())
-        .zip(k.index.par_iter())
+    let index = &k.index;
+    type Part = (Vec<[f32; 6]>, Vec<[f32; 3]>, usize);
+    let parts: Vec<Part> = k
+        .center
+        .par_chunks_mut(CHUNK)
+        .zip(k.amp.par_chunks_mut(CHUNK))
+        .zip(k.deep.par_chunks_mut(CHUNK))
+        .zip(k.shape.par_chunks_mut(CHUNK))
         .enumerate()
-        .for_each_init(
-            Candidates::default,
-            |cand, (kk, ((((((c, g), a), e), f), d), &i))| {
-                (*c, *g, *a, *e, *f, *d) = kernel_of(cand, kk, i as usize);
-            },
-        );
-    k.isotropic = iso_flag.iter().filter(|&&f| f).count();
+        .map_init(Candidates::default, |cand, (ci, (((c, a), d), sh))| {
+            let (mut gs, mut es, mut iso) = (Vec::new(), Vec::new(), 0);
+            for j in 0..c.len() {
+                let kk = ci * CHUNK + j;
+                let (cc, g, aa, e, f, dd) = kernel_of(cand, kk, index[kk] as usize);
+                (c[j], a[j], d[j]) = (cc, aa, dd);
+                iso += f as usize;
+                if (g, e) != plain {
+                    sh[j] = gs.len() as u32;
+                    gs.push(g);
+                    es.push(e);
+                }
+            }
+            (gs, es, iso)
+        })
+        .collect();
+    let mut base = Vec::with_capacity(parts.len());
+    for (gs, es, iso) in parts {
+        base.push(k.g.len() as u32);
+        k.g.extend_from_slice(&gs);
+        k.extent.extend_from_slice(&es);
+        k.isotropic += iso;
+    }
+    k.shape
+        .par_chunks_mut(CHUNK)
+        .zip(base.par_iter())
+        .for_each(|(sh, &b)| {
+            for s in sh.iter_mut().filter(|s| **s != PLAIN) {
+                *s += b;
+            }
+        });
+    k.g.shrink_to_fit();
+    k.extent.shrink_to_fit();
     k
 }
 

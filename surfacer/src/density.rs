@@ -5,8 +5,9 @@
 //! The field is computed block by block (8³ voxels, the level set's leaf size): each particle is
 //! binned into the blocks its kernel box touches, and every block sums its particles in index
 //! order — parallel over blocks and independent of the thread count. Only blocks some kernel
-//! touches exist; a block is kept at 16 bytes per voxel until the band is built. Blocks are stored
-//! inline in one vector, so dropping the field returns its memory to the system at once.
+//! touches exist; a block is kept at 10 bytes per voxel (f32 f, u16 velocities) until the band is
+//! built. Blocks are stored inline in one vector, so dropping the field returns its memory to the
+//! system at once.
 use crate::anisotropy::Kernels;
 use crate::hash::{FxMap, Key};
 use crate::levelset::{leaf_origin, voxel_index, LEAF_DIM, LEAF_SIZE};
@@ -75,6 +76,21 @@ impl DensityField {
     pub fn memory_bytes(&self) -> usize {
         self.blocks.len() * std::mem::size_of::<DensityBlock>()
     }
+}
+
+/// ⌈x⌉ as an integer without a libm call (x86-64's baseline has no `roundsd`): exact for
+/// |x| < 2³¹; NaN gives 0 like `x.ceil() as i32`. Used for row bounds in block-local voxel units.
+#[inline]
+fn ceil_i(x: Real) -> i32 {
+    let i = x as i32;
+    i + ((i as Real) < x) as i32
+}
+
+/// ⌊x⌋ as an integer, see [`ceil_i`].
+#[inline]
+fn floor_i(x: Real) -> i32 {
+    let i = x as i32;
+    i - ((i as Real) > x) as i32
 }
 
 /// Block-index box (origins / 8, inclusive) overlapped by the box `c ± e` (voxel size `1/inv`).
@@ -217,7 +233,7 @@ impl BlockIds {
 /// size `h`, in the *band blocks* only: blocks within `reach` (m) of a particle that is not deep
 /// (or within its kernel box and two voxels). Blocks that only deep kernels touch are recorded as
 /// interior (their voxels are ≥ ~0.6 r − kernel radius inside the liquid: f ≥ 1 − lattice noise).
-pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityField {
+pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> DensityField {
     let inv = 1.0 / h;
     let nk = k.center.len();
     let band = union_of_boxes(
@@ -275,33 +291,48 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
     let blocks: Vec<DensityBlock> = groups
         .par_iter()
         .map(|&(origin, s, e)| {
-            let mut f = [0f64; LEAF_SIZE];
-            let mut m = [[0f64; 3]; LEAF_SIZE];
+            // sums in f32, one row of 8 voxels (fixed x, y; z = 0..7) at a time: every row of a
+            // kernel's box is a quadratic s²(z) = C + z (B + z A) of the block-local z, evaluated
+            // on all 8 voxels (w = 0 where s² ≥ 1) without per-row bounds, in a fixed order
+            let mut f = [0f32; LEAF_SIZE];
+            let mut m = [[0f32; LEAF_SIZE]; 3];
             let ob = Vec3::new(origin[0] as Real, origin[1] as Real, origin[2] as Real);
             for &pi in &list[s..e] {
                 let i = pi as usize;
                 let ex = k.extent_of(i) * inv;
                 // centre in voxel units relative to the block; G in voxel units (q = Gv (x − c))
                 let c = k.center_of(i) * inv - ob;
-                let gs = k.g[i];
-                let amp = k.amp[i] as Real;
+                let gs = k.g_sym(i);
+                let amp = k.amp[i];
                 let v = vel[k.index[i] as usize];
-                let lo = (c - ex).map(|x| (x.ceil() as i32).max(0));
-                let hi = (c + ex).map(|x| (x.floor() as i32).min(LEAF_DIM - 1));
-                let mut add = |x: i32, y: i32, z: i32, s2: Real| {
-                    if s2 < 1.0 {
-                        let t = 1.0 - s2;
-                        let w = amp * t * t * t;
-                        let n = ((x << 6) | (y << 3) | z) as usize;
-                        f[n] += w;
-                        m[n][0] += w * v.x;
-                        m[n][1] += w * v.y;
-                        m[n][2] += w * v.z;
+                let lo = (c - ex).map(|x| ceil_i(x).max(0));
+                let hi = (c + ex).map(|x| floor_i(x).min(LEAF_DIM - 1));
+                if lo.z > hi.z {
+                    continue;
+                }
+                let mut row = |x: i32, y: i32, qa: Real, qb2: Real, qc: Real| {
+                    let (qa, qb2, qc) = (qa as f32, qb2 as f32, qc as f32);
+                    let base = ((x << 6) | (y << 3)) as usize;
+                    let fr = &mut f[base..base + 8];
+                    let mut w = [0f32; 8];
+                    for (z, wz) in w.iter_mut().enumerate() {
+                        let zz = z as f32;
+                        let t = (1.0 - (qc + zz * (qb2 + zz * qa))).max(0.0);
+                        *wz = amp * t * t * t;
+                    }
+                    for z in 0..8 {
+                        fr[z] += w[z];
+                    }
+                    for (a, ma) in m.iter_mut().enumerate() {
+                        let mr = &mut ma[base..base + 8];
+                        for z in 0..8 {
+                            mr[z] += w[z] * v[a];
+                        }
                     }
                 };
                 if gs[1] == 0.0 && gs[2] == 0.0 && gs[4] == 0.0 && gs[0] == gs[3] && gs[0] == gs[5]
                 {
-                    // isotropic: |q|² = s² |x − c|², z-interval from the radius
+                    // isotropic: s² = sc² (|x − c|² in the row) = sc² (ρ² + (z − c_z)²)
                     let sc = gs[0] as Real * h;
                     let (s2, r2) = (sc * sc, 1.0 / (sc * sc));
                     for x in lo.x..=hi.x {
@@ -312,13 +343,7 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
                             if rxy >= r2 {
                                 continue;
                             }
-                            let zr = (r2 - rxy).sqrt();
-                            let z0 = ((c.z - zr).ceil() as i32).max(lo.z);
-                            let z1 = ((c.z + zr).floor() as i32).min(hi.z);
-                            for z in z0..=z1 {
-                                let dz = z as Real - c.z;
-                                add(x, y, z, s2 * (rxy + dz * dz));
-                            }
+                            row(x, y, s2, -2.0 * s2 * c.z, s2 * (rxy + c.z * c.z));
                         }
                     }
                     continue;
@@ -329,7 +354,7 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
                     g.column(1).into_owned(),
                     g.column(2).into_owned(),
                 );
-                // |u + z gz|² < 1 is a quadratic in z: visit only its interval
+                // |u + z gz|² < 1 is a quadratic in z: rows where it has no root are skipped
                 let qa = gz.norm_squared();
                 if qa <= 0.0 {
                     continue;
@@ -340,17 +365,10 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
                     for y in lo.y..=hi.y {
                         let u = ux + gy * y as Real;
                         let (qb, qc) = (u.dot(&gz), u.norm_squared());
-                        let disc = qb * qb - qa * (qc - 1.0);
-                        if disc <= 0.0 {
+                        if qb * qb - qa * (qc - 1.0) <= 0.0 {
                             continue;
                         }
-                        let sd = disc.sqrt();
-                        let z0 = (((-qb - sd) / qa).ceil() as i32).max(lo.z);
-                        let z1 = (((-qb + sd) / qa).floor() as i32).min(hi.z);
-                        for z in z0..=z1 {
-                            let q = u + gz * z as Real;
-                            add(x, y, z, q.norm_squared());
-                        }
+                        row(x, y, qa, 2.0 * qb, qc);
                     }
                 }
             }
@@ -358,10 +376,10 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
             let mut vo = [[0f32; 3]; LEAF_SIZE];
             let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
             for n in 0..LEAF_SIZE {
-                fo[n] = f[n] as f32;
+                fo[n] = f[n];
                 if f[n] > 0.0 {
                     for a in 0..3 {
-                        let v = (m[n][a] / f[n]) as f32;
+                        let v = m[a][n] / f[n];
                         vo[n][a] = v;
                         lo[a] = lo[a].min(v);
                         hi[a] = hi[a].max(v);
@@ -383,9 +401,9 @@ pub fn rasterize(k: &Kernels, vel: &[Vec3], h: Real, reach: Real) -> DensityFiel
                 if f[n] > 0.0 {
                     for a in 0..3 {
                         if vstep[a] > 0.0 {
-                            vq[n][a] = ((vo[n][a] - vmin[a]) / vstep[a])
-                                .round()
-                                .clamp(0.0, 65535.0) as u16;
+                            // non-negative: rounding by truncation of x + ½ (no libm call)
+                            vq[n][a] =
+                                ((vo[n][a] - vmin[a]) / vstep[a] + 0.5).clamp(0.0, 65535.0) as u16;
                         }
                     }
                 }

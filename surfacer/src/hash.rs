@@ -53,10 +53,25 @@ pub type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 /// Integer coordinates of a voxel or block.
 pub type Key = [i32; 3];
 
+/// Cell → range in [`CellGrid::order`]: a dense table of range starts over the cells' bounding
+/// box when that is small, a hash map otherwise.
+enum Cells {
+    Dense {
+        lo: Key,
+        dim: [i32; 3],
+        /// start of cell c's range; its end is start[c + 1]
+        start: Vec<u32>,
+    },
+    Hash(FxMap<Key, (u32, u32)>),
+}
+
+/// Cells (at most this many, and at most 4 per point) for which the dense table is used.
+const DENSE_CELLS: i64 = 1 << 24;
+
 /// Uniform cell grid over a point set; cells hold point indices in increasing order.
 pub struct CellGrid {
     inv_h: Real,
-    cells: FxMap<Key, (u32, u32)>,
+    cells: Cells,
     order: Vec<u32>,
     /// positions in cell order (contiguous per cell, for cache locality)
     sorted: Vec<Vec3>,
@@ -76,7 +91,19 @@ impl CellGrid {
     /// Range in [`Self::order`] of the points of cell `key` (if occupied).
     #[inline]
     pub fn cell_range(&self, key: Key) -> Option<(u32, u32)> {
-        self.cells.get(&key).copied()
+        match &self.cells {
+            Cells::Dense { lo, dim, start } => {
+                let d = [key[0] - lo[0], key[1] - lo[1], key[2] - lo[2]];
+                if (0..3).any(|a| d[a] < 0 || d[a] >= dim[a]) {
+                    return None;
+                }
+                let c = ((d[0] as usize * dim[1] as usize) + d[1] as usize) * dim[2] as usize
+                    + d[2] as usize;
+                let (s, e) = (start[c], start[c + 1]);
+                (e > s).then_some((s, e))
+            }
+            Cells::Hash(m) => m.get(&key).copied(),
+        }
     }
 
     /// Cell of a point.
@@ -92,7 +119,54 @@ impl CellGrid {
 
     /// Bins `points` into cells of size `h`.
     pub fn build(points: &[Vec3], h: Real) -> CellGrid {
+        Self::build_with(points, h, DENSE_CELLS)
+    }
+
+    /// [`Self::build`] with the dense table for at most `dense_limit` cells. Both paths give the
+    /// same order: by cell (x, then y, then z), then by index.
+    fn build_with(points: &[Vec3], h: Real, dense_limit: i64) -> CellGrid {
         let inv_h = 1.0 / h;
+        let (lo, hi) = points
+            .iter()
+            .fold(([i32::MAX; 3], [i32::MIN; 3]), |(l, u), p| {
+                let k = cell_of(p, inv_h);
+                (
+                    [l[0].min(k[0]), l[1].min(k[1]), l[2].min(k[2])],
+                    [u[0].max(k[0]), u[1].max(k[1]), u[2].max(k[2])],
+                )
+            });
+        let dim = [0, 1, 2].map(|a| (hi[a] as i64 - lo[a] as i64 + 1).max(0));
+        let ncells = dim[0] * dim[1] * dim[2];
+        if !points.is_empty() && ncells <= dense_limit && ncells <= 4 * points.len() as i64 + 64 {
+            // counting sort by the dense cell index (stable: indices stay increasing per cell)
+            let dim = dim.map(|d| d as i32);
+            let index = |p: &Vec3| {
+                let k = cell_of(p, inv_h);
+                ((k[0] - lo[0]) as usize * dim[1] as usize + (k[1] - lo[1]) as usize)
+                    * dim[2] as usize
+                    + (k[2] - lo[2]) as usize
+            };
+            let mut start = vec![0u32; ncells as usize + 1];
+            for p in points {
+                start[index(p) + 1] += 1;
+            }
+            for c in 0..ncells as usize {
+                start[c + 1] += start[c];
+            }
+            let mut fill = start.clone();
+            let mut order = vec![0u32; points.len()];
+            for (i, p) in points.iter().enumerate() {
+                let c = index(p);
+                order[fill[c] as usize] = i as u32;
+                fill[c] += 1;
+            }
+            return CellGrid {
+                inv_h,
+                cells: Cells::Dense { lo, dim, start },
+                sorted: order.iter().map(|&i| points[i as usize]).collect(),
+                order,
+            };
+        }
         let mut keyed: Vec<(Key, u32)> = points
             .iter()
             .enumerate()
@@ -112,7 +186,7 @@ impl CellGrid {
         let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
         CellGrid {
             inv_h,
-            cells,
+            cells: Cells::Hash(cells),
             sorted: order.iter().map(|&i| points[i as usize]).collect(),
             order,
         }
@@ -150,7 +224,7 @@ impl CellGrid {
                     if gy + gap2(q.z, c[2], dz) > r2 {
                         continue;
                     }
-                    if let Some(&(s, e)) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
+                    if let Some((s, e)) = self.cell_range([c[0] + dx, c[1] + dy, c[2] + dz]) {
                         let (s, e) = (s as usize, e as usize);
                         for (p, &j) in self.sorted[s..e].iter().zip(&self.order[s..e]) {
                             let d2 = (p - q).norm_squared();
@@ -198,6 +272,31 @@ mod tests {
                     .filter(|&j| (pts[j] - q).norm() <= 0.5)
                     .collect();
                 assert_eq!(found, brute, "cell {cell}");
+            }
+        }
+    }
+
+    #[test]
+    fn dense_and_hashed_cells_give_the_same_grid() {
+        let pts: Vec<Vec3> = (0..500)
+            .map(|i| {
+                let t = i as Real * 0.61;
+                Vec3::new(
+                    t.sin() * 1.5,
+                    (0.9 * t).cos() * 1.5 - 3.0,
+                    (0.3 * t).sin() + 7.0,
+                )
+            })
+            .collect();
+        let d = CellGrid::build_with(&pts, 0.3, DENSE_CELLS);
+        let h = CellGrid::build_with(&pts, 0.3, 0);
+        assert!(matches!(d.cells, Cells::Dense { .. }) && matches!(h.cells, Cells::Hash(_)));
+        assert_eq!(d.order, h.order);
+        for p in &pts {
+            let k = d.cell_key(p);
+            for dk in [[0, 0, 0], [1, 0, 0], [0, -1, 0], [0, 0, 40]] {
+                let q = [k[0] + dk[0], k[1] + dk[1], k[2] + dk[2]];
+                assert_eq!(d.cell_range(q), h.cell_range(q));
             }
         }
     }

@@ -254,8 +254,9 @@ pub struct WorkLeaf {
     /// φ (m)
     pub phi: [f32; LEAF_SIZE],
     /// closest surface point of each set voxel, as an offset from the voxel in units of
-    /// [`crate::redistance::CP_UNIT`] voxels
-    pub cp: [[i16; 3]; LEAF_SIZE],
+    /// [`crate::redistance::CP_UNIT`] voxels ([`LEAF_SIZE`] entries while the band is propagated,
+    /// then freed: the later stages only need φ)
+    pub cp: Vec<[i16; 3]>,
     /// velocity source of each set voxel: index into [`WorkGrid::sources`]
     pub src: [u32; LEAF_SIZE],
     /// voxels whose φ has been computed
@@ -269,7 +270,7 @@ impl WorkLeaf {
         let mut l = Box::new(WorkLeaf {
             origin,
             phi: [bg; LEAF_SIZE],
-            cp: [[0; 3]; LEAF_SIZE],
+            cp: vec![[0; 3]; LEAF_SIZE],
             src: [u32::MAX; LEAF_SIZE],
             set: [0; 8],
         });

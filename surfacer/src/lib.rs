@@ -8,12 +8,15 @@
 //! 4. [`redistance`]: zero crossing → narrow-band signed distance (closest-point propagation).
 //! 5. [`sheets`], [`filaments`]: oriented disks (codim 1), tubes (codim 2) and spheres (codim 3),
 //!    unioned into the level set and also meshed explicitly.
-//! 6. [`mesh`]: marching tetrahedra of the zero crossing (watertight, manifold).
-//! 7. [`vdb`], [`ply`]: writers; [`pipeline`]: per-frame driver with atomic outputs.
+//! 6. [`mesh`]: marching cubes of the zero crossing (watertight, manifold).
+//! 7. [`vdb`], [`ply`]: writers; [`pipeline`]: per-frame driver with atomic outputs;
+//!    [`alloc`]: the allocator setting a surfacing process opts into.
 //!
 //! The crate does not depend on the `codimfx` solver; it only knows the cache format.
 
+pub mod alloc;
 pub mod anisotropy;
+pub mod band;
 pub mod cache;
 pub mod density;
 pub mod error;
@@ -31,7 +34,9 @@ pub use cache::ParticleFrame;
 pub use error::SurfaceError;
 pub use levelset::LevelSet;
 pub use mesh::TriMesh;
-pub use pipeline::{surface_cache, surface_particles, FrameGeometry, SurfaceOptions};
+pub use pipeline::{
+    surface_cache, surface_frame, surface_particles, FrameGeometry, SurfaceOptions,
+};
 
 /// Floating-point type used for all geometry (positions in metres).
 pub type Real = f64;

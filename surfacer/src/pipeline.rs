@@ -1,7 +1,7 @@
 //! Per-frame driver: particles → level set (volume kernels ∪ disks ∪ tubes ∪ spheres) → mesh,
 //! and the sequence driver writing `surface.####.vdb`, `mesh.####.ply`, `sheets.####.ply`,
 //! `filaments.####.ply` atomically, frames in parallel.
-use crate::anisotropy::{build_kernels, AnisoParams};
+use crate::anisotropy::{build_kernels_owned, AnisoParams};
 use crate::cache::{frame_path, list_frames, read_frame, ParticleFrame};
 use crate::filaments::{chain_filaments, tube_prims, tubes_mesh, FilamentParams};
 use crate::levelset::{LevelSet, WorkGrid};
@@ -160,23 +160,56 @@ pub fn volume_spacing(frame: &ParticleFrame) -> Option<Real> {
     Some(mean * (4.0 * std::f64::consts::PI / 3.0).cbrt())
 }
 
-/// Surfaces one frame.
-pub fn surface_particles(
+/// What the volume stages keep of a frame: the volume particles' positions, volumes and
+/// velocities (f32: they only feed the `v` grid and the mesh's `vx vy vz`, stored as f32).
+struct VolumeInput {
+    pos: Vec<Vec3>,
+    vol: Vec<Real>,
+    vel: Vec<[f32; 3]>,
+}
+
+impl VolumeInput {
+    fn of(frame: &ParticleFrame) -> Self {
+        let n = frame.codim.iter().filter(|&&c| c == 0).count();
+        let mut v = VolumeInput {
+            pos: Vec::with_capacity(n),
+            vol: Vec::with_capacity(n),
+            vel: Vec::with_capacity(n),
+        };
+        for i in (0..frame.len()).filter(|&i| frame.codim[i] == 0) {
+            v.pos.push(frame.pos[i]);
+            v.vol
+                .push(4.0 / 3.0 * std::f64::consts::PI * frame.pscale[i].powi(3));
+            let u = frame.vel[i];
+            v.vel.push([u.x as f32, u.y as f32, u.z as f32]);
+        }
+        v
+    }
+}
+
+/// The result for a frame without particles: an empty (all outside) level set with a valid
+/// transform.
+fn empty_geometry(o: &SurfaceOptions) -> FrameGeometry {
+    let h = o.voxel_size.unwrap_or(1.0);
+    FrameGeometry {
+        levelset: LevelSet::new(h, (o.band_voxels * h) as f32, Vec::new(), Vec::new()),
+        ..Default::default()
+    }
+}
+
+/// Checks a frame and picks the voxel size: (particle spacing, stats with the counts and voxel
+/// size), or `None` when there is nothing to surface.
+fn prepare(
     frame: &ParticleFrame,
     o: &SurfaceOptions,
-) -> Result<FrameGeometry, SurfaceError> {
+) -> Result<Option<(Real, FrameStats)>, SurfaceError> {
     o.validate()?;
     let mut st = FrameStats::default();
     for c in &frame.codim {
         st.particles[(*c).min(3) as usize] += 1;
     }
     let Some(dx) = volume_spacing(frame) else {
-        // no particles: an empty (all outside) level set with a valid transform
-        let h = o.voxel_size.unwrap_or(1.0);
-        return Ok(FrameGeometry {
-            levelset: LevelSet::new(h, (o.band_voxels * h) as f32, Vec::new(), Vec::new()),
-            ..Default::default()
-        });
+        return Ok(None);
     };
     let h = o.voxel_size.unwrap_or(o.voxel_rel * dx);
     st.voxel = h;
@@ -188,33 +221,104 @@ pub fn surface_particles(
             voxel_size: h,
         });
     }
+    Ok(Some((dx, st)))
+}
+
+/// Surfaces one frame.
+pub fn surface_particles(
+    frame: &ParticleFrame,
+    o: &SurfaceOptions,
+) -> Result<FrameGeometry, SurfaceError> {
+    let Some((dx, st)) = prepare(frame, o)? else {
+        return Ok(empty_geometry(o));
+    };
+    surface_volume(VolumeInput::of(frame), frame, dx, st, o)
+}
+
+/// Surfaces one frame it takes over: the volume particles' data is copied out (positions,
+/// volumes, f32 velocities) and the frame is dropped before the volume stages, keeping only its
+/// sheet, filament and point particles. Same result as [`surface_particles`], less memory.
+pub fn surface_frame(
+    frame: ParticleFrame,
+    o: &SurfaceOptions,
+) -> Result<FrameGeometry, SurfaceError> {
+    let Some((dx, st)) = prepare(&frame, o)? else {
+        return Ok(empty_geometry(o));
+    };
+    let mut rest = ParticleFrame::default();
+    for i in (0..frame.len()).filter(|&i| frame.codim[i] != 0) {
+        rest.push(
+            frame.pos[i],
+            frame.vel[i],
+            frame.id[i],
+            frame.codim[i],
+            frame.pscale[i],
+            frame.mass[i],
+            frame.frame[i],
+        );
+    }
+    // the volume particles' columns are filtered in place, the others freed at once
+    let ParticleFrame {
+        mut pos,
+        vel,
+        codim,
+        mut pscale,
+        id,
+        mass,
+        frame,
+    } = frame;
+    drop((id, mass, frame));
+    fn keep<T>(v: &mut Vec<T>, codim: &[u8]) {
+        let mut k = codim.iter();
+        v.retain(|_| k.next() == Some(&0));
+    }
+    let vel32: Vec<[f32; 3]> = vel
+        .iter()
+        .zip(&codim)
+        .filter(|(_, &c)| c == 0)
+        .map(|(u, _)| [u.x as f32, u.y as f32, u.z as f32])
+        .collect();
+    drop(vel);
+    keep(&mut pos, &codim);
+    keep(&mut pscale, &codim);
+    drop(codim);
+    for s in pscale.iter_mut() {
+        *s = 4.0 / 3.0 * std::f64::consts::PI * s.powi(3);
+    }
+    let vin = VolumeInput {
+        pos,
+        vol: pscale,
+        vel: vel32,
+    };
+    surface_volume(vin, &rest, dx, st, o)
+}
+
+/// The stages after [`prepare`]: volume particles from `vin`, the other codimensions from `frame`.
+fn surface_volume(
+    vin: VolumeInput,
+    frame: &ParticleFrame,
+    dx: Real,
+    mut st: FrameStats,
+    o: &SurfaceOptions,
+) -> Result<FrameGeometry, SurfaceError> {
+    let h = st.voxel;
     let band = o.band_voxels;
     let iso = o.iso as f32;
+    let has_volume = !vin.pos.is_empty();
 
     let t = Instant::now();
-    let vi = frame.indices_of(0);
-    let vpos: Vec<Vec3> = vi.iter().map(|&i| frame.pos[i]).collect();
-    let vvol: Vec<Real> = vi
-        .iter()
-        .map(|&i| 4.0 / 3.0 * std::f64::consts::PI * frame.pscale[i].powi(3))
-        .collect();
-    let mut kernels = build_kernels(&vpos, &vvol, dx, &o.aniso);
-    // kernel → frame index (velocities are read from the frame)
-    kernels
-        .index
-        .par_iter_mut()
-        .for_each(|i| *i = vi[*i as usize] as u32);
-    drop(vpos);
-    let target: Real = vvol.iter().sum();
-    drop(vvol);
+    let VolumeInput { pos, vol, vel } = vin;
+    let kernels = build_kernels_owned(pos, &vol, dx, &o.aniso);
+    let target: Real = vol.iter().sum();
+    drop(vol);
     st.isotropic_kernels = kernels.isotropic;
     st.deep_kernels = kernels.deep.iter().filter(|&&d| d).count();
     st.seconds[0] = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let reach = o.aniso.radius_rel * dx + 2.0 * h;
-    let dens = crate::density::rasterize(&kernels, &frame.vel, h, reach);
-    drop(kernels);
+    let dens = crate::density::rasterize(&kernels, &vel, h, reach);
+    drop((kernels, vel));
     st.density_blocks = dens.blocks.len();
     st.interior_blocks = dens.interior.len();
     let dens_bytes = dens.memory_bytes();
@@ -223,10 +327,10 @@ pub fn surface_particles(
     let t = Instant::now();
     let (mut grid, extra_inside, signs, info): (WorkGrid, _, _, _) = redistance(dens, iso, band);
     st.redistance = info;
-    if o.smooth_iterations > 0 && !vi.is_empty() {
+    if o.smooth_iterations > 0 && has_volume {
         crate::redistance::smooth_band(&mut grid, &|k| signs.inside(k), o.smooth_iterations);
     }
-    if o.conserve_volume && !vi.is_empty() {
+    if o.conserve_volume && has_volume {
         st.volume_shift = crate::redistance::conserve_volume(&mut grid, &signs, target, band);
     }
     st.seconds[2] = t.elapsed().as_secs_f64();
@@ -349,7 +453,7 @@ pub fn surface_cache(
             .par_iter()
             .map(|&f| {
                 let frame = read_frame(&frame_path(cache_dir, f))?;
-                let g = surface_particles(&frame, o)?;
+                let g = surface_frame(frame, o)?;
                 write_outputs(out_dir, f, &g)?;
                 done(f, &g.stats);
                 Ok(())
@@ -359,9 +463,10 @@ pub fn surface_cache(
     Ok(frames)
 }
 
-/// Bytes of peak memory per particle measured by `codimfx bench surface` (≈1.5 kB at voxel = Δ/2),
-/// with a safety factor.
-const BYTES_PER_PARTICLE: u64 = 2048;
+/// Bytes of peak memory per particle of one frame: `codimfx bench surface` measures ≈ 160 B
+/// (peak RSS 133–138 MB for 863 582 particles at voxel = Δ/2, frame included, docs/benchmarks.md
+/// round 3); ×3 for other shapes and finer voxels.
+const BYTES_PER_PARTICLE: u64 = 512;
 /// Bytes per particle in a cache file (docs/cache-format.md: 11 doubles, a uint and a uchar).
 const CACHE_BYTES_PER_PARTICLE: u64 = 11 * 8 + 4 + 1;
 

@@ -38,6 +38,8 @@ type Update = (usize, f32, [i16; 3], u32);
 /// voxels; propagation keeps them within band + 1): exact integer shifts from voxel to voxel.
 pub const CP_UNIT: Real = 1.0 / 4096.0;
 
+pub use crate::band::{conserve_volume, smooth_band};
+
 /// Builds the band of half width `band`·Δx around f = `iso`. The field is consumed once the seeds
 /// are taken (only its signs are kept). Returns the grid, the origins of density blocks entirely
 /// inside that are not in the band, the signs, and counts.
@@ -86,13 +88,31 @@ pub fn redistance(
         .filter(|(bi, _)| !no_seeds(*bi))
         .map(|(_, b)| {
             let mut out = Vec::new();
+            // the six face-neighbour blocks (slot 2a + (s > 0)), or their tile value
+            let face: [(Option<&crate::density::DensityBlock>, f32); 6] =
+                std::array::from_fn(|q| {
+                    let mut o = b.origin;
+                    o[q / 2] += if q % 2 == 0 { -8 } else { 8 };
+                    match d.index.get(&o) {
+                        Some(&j) => (Some(&d.blocks[j]), 0.0),
+                        None if d.interior.binary_search(&o).is_ok() => (None, 1.0),
+                        None => (None, 0.0),
+                    }
+                });
+            let fetch = |nb: Key, q: usize| -> f32 {
+                match face[q] {
+                    (Some(bl), _) => bl.f[voxel_index(nb)],
+                    (None, t) => t,
+                }
+            };
             for n in 0..LEAF_SIZE {
                 let ijk = voxel_of(b.origin, n);
                 let f = b.f[n];
                 let ins = f >= iso;
                 let mut inv2 = 0.0f64;
                 let mut grad = Vec3::zeros();
-                let mut vel = b.vel(n);
+                // voxel whose velocity the seed takes (itself, or across the crossing when f ≤ 0)
+                let mut vel_from: Option<(Key, usize)> = None;
                 let mut any = false;
                 for a in 0..3 {
                     let mut dmin = Real::INFINITY;
@@ -104,14 +124,14 @@ pub fn redistance(
                         let fnb = if (nb[a] & !7) == b.origin[a] {
                             b.f[voxel_index(nb)]
                         } else {
-                            d.f(nb)
+                            fetch(nb, 2 * a + si)
                         };
                         fs[si] = fnb;
                         if (fnb >= iso) != ins {
                             let t = ((f - iso) as Real / (f - fnb) as Real).clamp(0.0, 1.0);
                             dmin = dmin.min(t * h);
                             if f <= 0.0 {
-                                vel = d.vel(nb);
+                                vel_from = Some((nb, 2 * a + si));
                             }
                             any = true;
                         }
@@ -125,6 +145,11 @@ pub fn redistance(
                 if !any {
                     continue;
                 }
+                let vel = match vel_from {
+                    None => b.vel(n),
+                    Some((nb, q)) if (nb[q / 2] & !7) == b.origin[q / 2] => b.vel(voxel_index(nb)),
+                    Some((nb, q)) => face[q].0.map_or([0.0; 3], |bl| bl.vel(voxel_index(nb))),
+                };
                 let phi = (1.0 / inv2.sqrt()) * if ins { -1.0 } else { 1.0 };
                 let gn = grad.norm();
                 let flat = gn.is_nan() || gn <= 0.0;
@@ -187,30 +212,80 @@ pub fn redistance(
     let layers = band.ceil() as usize + 1;
     let limit = (band + 1.0) * h;
     for _ in 0..layers {
-        // create the neighbour leaves a front voxel on a leaf face can reach (sorted: deterministic)
-        let mut need: Vec<Key> = Vec::new();
-        for (li, fr) in front.iter().enumerate() {
-            if fr.iter().all(|&w| w == 0) {
-                continue;
-            }
-            let o = grid.leaves[li].origin;
-            // faces touched by the front (layout: word x, bit 8y + z)
-            let any = fr.iter().fold(0u64, |a, &w| a | w);
-            let lo = [fr[0] != 0, any & 0xFF != 0, any & Z0 != 0];
-            let hi = [fr[7] != 0, any >> 56 != 0, any & Z7 != 0];
-            for dx in -1i32..=1 {
-                for dy in -1i32..=1 {
-                    for dz in -1i32..=1 {
-                        let d = [dx, dy, dz];
-                        if (0..3).all(|a| d[a] == 0 || (d[a] < 0 && lo[a]) || (d[a] > 0 && hi[a]))
-                            && d != [0, 0, 0]
-                        {
-                            need.push([o[0] + 8 * dx, o[1] + 8 * dy, o[2] + 8 * dz]);
+        // create the neighbour leaves in which a front voxel on a leaf face gives some voxel a
+        // distance within the limit (exact: a voxel is set iff one of its set neighbours' closest
+        // points is within the limit, and every set voxel was once front); sorted: deterministic
+        let lim2 = (limit / (CP_UNIT * h)).powi(2);
+        let g = &grid;
+        let mut need: Vec<Key> = front
+            .par_iter()
+            .enumerate()
+            .filter(|(_, fr)| {
+                // faces touched by the front (layout: word x, bit 8y + z)
+                let any = fr.iter().fold(0u64, |a, &w| a | w);
+                fr[0] != 0 || fr[7] != 0 || any & (0xFF | (0xFF << 56) | Z0 | Z7) != 0
+            })
+            .flat_map_iter(|(li, fr)| {
+                let l = &g.leaves[li];
+                let o = l.origin;
+                // neighbour leaves that exist (slot (dx+1)·9 + (dy+1)·3 + dz+1)
+                let mut exists = [false; 27];
+                for (sl, e) in exists.iter_mut().enumerate() {
+                    let d = [sl as i32 / 9 - 1, sl as i32 / 3 % 3 - 1, sl as i32 % 3 - 1];
+                    *e = sl == 13
+                        || g.index.contains_key(&[
+                            o[0] + 8 * d[0],
+                            o[1] + 8 * d[1],
+                            o[2] + 8 * d[2],
+                        ]);
+                }
+                let mut want = [false; 27];
+                if exists.iter().all(|&e| e) {
+                    return Vec::new();
+                }
+                for n in 0..LEAF_SIZE {
+                    if fr[n >> 6] >> (n & 63) & 1 == 0 {
+                        continue;
+                    }
+                    let k = voxel_of([0, 0, 0], n);
+                    if k.iter().all(|&c| c > 0 && c < 7) {
+                        continue;
+                    }
+                    let c = l.cp[n];
+                    for dx in -1..=1i32 {
+                        for dy in -1..=1i32 {
+                            for dz in -1..=1i32 {
+                                let d = [dx, dy, dz];
+                                let side = |a: usize| {
+                                    let q = k[a] + d[a];
+                                    if q < 0 {
+                                        0
+                                    } else if q > 7 {
+                                        2
+                                    } else {
+                                        1
+                                    }
+                                };
+                                let sl = side(0) * 9 + side(1) * 3 + side(2);
+                                if exists[sl] || want[sl] {
+                                    continue;
+                                }
+                                let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
+                                let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
+                                want[sl] = d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767);
+                            }
                         }
                     }
                 }
-            }
-        }
+                (0..27)
+                    .filter(|&sl| want[sl])
+                    .map(|sl| {
+                        let d = [sl as i32 / 9 - 1, sl as i32 / 3 % 3 - 1, sl as i32 % 3 - 1];
+                        [o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]]
+                    })
+                    .collect::<Vec<Key>>()
+            })
+            .collect();
         need.sort_unstable();
         need.dedup();
         for k in need {
@@ -270,23 +345,41 @@ pub fn redistance(
                     let k = voxel_of([0, 0, 0], n);
                     // nearest closest point among the set neighbours, in voxel units
                     let mut best = (i64::MAX, [0i16; 3], 0u32);
-                    for dx in -1..=1 {
-                        for dy in -1..=1 {
-                            for dz in -1..=1 {
-                                let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
-                                    continue;
-                                };
-                                let lj = &g.leaves[j];
-                                if lj.is_set(m) {
-                                    let c = lj.cp[m];
-                                    let e = [
-                                        c[0] as i64 + dx as i64 * 4096,
-                                        c[1] as i64 + dy as i64 * 4096,
-                                        c[2] as i64 + dz as i64 * 4096,
-                                    ];
-                                    let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                                    if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
-                                        best = (d2, e.map(|v| v as i16), lj.src[m]);
+                    let mut consider = |lj: &WorkLeaf, m: usize, d: [i32; 3]| {
+                        let c = lj.cp[m];
+                        let e = [0, 1, 2].map(|a| c[a] as i64 + d[a] as i64 * 4096);
+                        let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                        if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
+                            best = (d2, e.map(|v| v as i16), lj.src[m]);
+                        }
+                    };
+                    if k.iter().all(|&c| c > 0 && c < 7) {
+                        // all 26 neighbours in this leaf, and only the front ones can win: a
+                        // voxel set before the previous layer had this candidate as a candidate
+                        // once (or its leaf was not needed) and was then farther than the limit,
+                        // so it cannot give a distance within the limit now. The front bits
+                        // around the voxel, 3 rows of 3 per x-word, in (dx, dy, dz) order
+                        let sh = 8 * (k[1] - 1) + (k[2] - 1);
+                        for dx in -1..=1 {
+                            let mut bits = (fr[li][(k[0] + dx) as usize] >> sh) & 0x07_0707;
+                            while bits != 0 {
+                                let b = bits.trailing_zeros() as i32;
+                                bits &= bits - 1;
+                                let (dy, dz) = (b / 8 - 1, b % 8 - 1);
+                                let m = (n as i32 + dx * 64 + dy * 8 + dz) as usize;
+                                consider(leaf, m, [dx, dy, dz]);
+                            }
+                        }
+                    } else {
+                        for dx in -1..=1 {
+                            for dy in -1..=1 {
+                                for dz in -1..=1 {
+                                    let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                                        continue;
+                                    };
+                                    let lj = &g.leaves[j];
+                                    if lj.is_set(m) {
+                                        consider(lj, m, [dx, dy, dz]);
                                     }
                                 }
                             }
@@ -327,9 +420,12 @@ pub fn redistance(
             }
         }
     }
-    // leaves the band never reached hold only ±background, which the signs give anyway
+    // leaves the band never reached hold only ±background, which the signs give anyway; the
+    // closest points are no longer needed (3 of the 7 kB per leaf)
     drop(front);
     grid.leaves.retain(|l| l.set.iter().any(|&w| w != 0));
+    grid.leaves.par_iter_mut().for_each(|l| l.cp = Vec::new());
+    crate::alloc::trim();
     grid.index = grid
         .leaves
         .iter()
@@ -354,177 +450,6 @@ pub fn redistance(
         )
         .collect();
     (grid, extra_inside, signs, info)
-}
-
-/// Smooths the band with `iterations` passes of the separable [1 2 1]/4 filter (a 3×3×3 binomial,
-/// variance ½ voxel² per axis) on the voxels whose φ is set; others keep ±background. The
-/// particles' lattice leaves bumps of ~2 voxels' wavelength on the iso-surface (Δ = 2 voxels);
-/// one pass damps them by ½ per tangential axis, while a sphere of radius R voxels moves by only
-/// ~½/R voxel (corrected by [`conserve_volume`] afterwards). Leaves are filtered independently from
-/// the unfiltered values (Jacobi), so the result does not depend on the thread count.
-pub fn smooth_band(grid: &mut WorkGrid, inside: &(impl Fn(Key) -> bool + Sync), iterations: usize) {
-    let bg = grid.bg;
-    for _ in 0..iterations {
-        let g = &*grid;
-        let out: Vec<[f32; LEAF_SIZE]> = g
-            .leaves
-            .par_iter()
-            .map(|l| {
-                let o = l.origin;
-                // padded 10³ block of φ, index (x·10 + y)·10 + z
-                let mut p = [0f32; 1000];
-                let mut nb: [Option<usize>; 27] = [None; 27];
-                for (sl, slot) in nb.iter_mut().enumerate() {
-                    let d = [
-                        (sl / 9) as i32 - 1,
-                        (sl / 3 % 3) as i32 - 1,
-                        (sl % 3) as i32 - 1,
-                    ];
-                    *slot = g
-                        .index
-                        .get(&[o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]])
-                        .copied();
-                }
-                for x in -1..9i32 {
-                    for y in -1..9i32 {
-                        for z in -1..9i32 {
-                            let s = |v: i32| {
-                                if v < 0 {
-                                    0
-                                } else if v > 7 {
-                                    2
-                                } else {
-                                    1
-                                }
-                            };
-                            let sl = (s(x) * 9 + s(y) * 3 + s(z)) as usize;
-                            let k = [o[0] + x, o[1] + y, o[2] + z];
-                            let v = match nb[sl] {
-                                Some(j) => g.leaves[j].phi[voxel_index(k)],
-                                None if inside(k) => -bg,
-                                None => bg,
-                            };
-                            p[(((x + 1) * 10 + y + 1) * 10 + z + 1) as usize] = v;
-                        }
-                    }
-                }
-                let at = |x: usize, y: usize, z: usize| (x * 10 + y) * 10 + z;
-                let mut a = [0f32; 1000];
-                for x in 1..9 {
-                    for y in 0..10 {
-                        for z in 0..10 {
-                            a[at(x, y, z)] = 0.25
-                                * (p[at(x - 1, y, z)] + 2.0 * p[at(x, y, z)] + p[at(x + 1, y, z)]);
-                        }
-                    }
-                }
-                let mut b = [0f32; 1000];
-                for x in 1..9 {
-                    for y in 1..9 {
-                        for z in 0..10 {
-                            b[at(x, y, z)] = 0.25
-                                * (a[at(x, y - 1, z)] + 2.0 * a[at(x, y, z)] + a[at(x, y + 1, z)]);
-                        }
-                    }
-                }
-                let mut phi = l.phi;
-                for (n, v) in phi.iter_mut().enumerate() {
-                    if l.is_set(n) {
-                        let k = voxel_of([1, 1, 1], n);
-                        let (x, y, z) = (k[0] as usize, k[1] as usize, k[2] as usize);
-                        *v =
-                            0.25 * (b[at(x, y, z - 1)] + 2.0 * b[at(x, y, z)] + b[at(x, y, z + 1)]);
-                    }
-                }
-                phi
-            })
-            .collect();
-        grid.leaves
-            .par_iter_mut()
-            .zip(out)
-            .for_each(|(l, phi)| l.phi = phi);
-    }
-}
-
-/// Volume-preserving offset. Centre smoothing (λ) and flattened surface kernels pull the
-/// iso-surface inward by a fraction of the spacing (Yu & Turk 2013 §4 note the shrinkage). We
-/// restore the particles' total volume V_p: with the grid's enclosed volume V(φ) and surface area
-/// A(φ), both from a smeared Heaviside of width ε = 1.5 Δx (V = Δx³ Σ H(−φ), A = Δx³ Σ δ(φ)),
-/// every band value is shifted by d = (V(φ) − V_p)/A, clamped to ±band/2. Returns the shift (m).
-pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, band: Real) -> Real {
-    let h = grid.voxel;
-    let eps = 1.5 * h;
-    let heav = |x: Real| {
-        if x <= -eps {
-            0.0
-        } else if x >= eps {
-            1.0
-        } else {
-            0.5 * (1.0 + x / eps + (std::f64::consts::PI * x / eps).sin() / std::f64::consts::PI)
-        }
-    };
-    let delta = |x: Real| {
-        if x.abs() >= eps {
-            0.0
-        } else {
-            0.5 / eps * (1.0 + (std::f64::consts::PI * x / eps).cos())
-        }
-    };
-    let h3 = h * h * h;
-    let interior = signs
-        .blocks
-        .par_iter()
-        .filter(|b| !grid.index.contains_key(&b.0))
-        .map(|b| b.1.iter().map(|w| w.count_ones() as Real).sum::<Real>())
-        .sum::<Real>()
-        + signs
-            .interior
-            .par_iter()
-            .filter(|b| !grid.index.contains_key(*b))
-            .count() as Real
-            * LEAF_SIZE as Real;
-    // V(s), A(s) of the shifted field φ + s
-    let eval = |s: Real| {
-        let (v, a) = grid
-            .leaves
-            .par_iter()
-            .map(|l| {
-                let mut v = 0.0;
-                let mut a = 0.0;
-                for n in 0..LEAF_SIZE {
-                    let phi = l.phi[n] as Real + if l.is_set(n) { s } else { 0.0 };
-                    v += heav(-phi);
-                    a += delta(phi);
-                }
-                (v, a)
-            })
-            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
-        ((v + interior) * h3, a * h3)
-    };
-    // Newton iterations on V(s) = V_p (V decreases with s at rate A)
-    let lim = 0.5 * band * h;
-    let mut shift = 0.0;
-    for _ in 0..4 {
-        let (vol, area) = eval(shift);
-        if area.is_nan() || area <= 0.0 {
-            break;
-        }
-        let next = (shift + (vol - target) / area).clamp(-lim, lim);
-        let step = (next - shift).abs();
-        shift = next;
-        if step < 1e-4 * h {
-            break;
-        }
-    }
-    let bg = grid.bg;
-    grid.leaves.par_iter_mut().for_each(|l| {
-        for n in 0..LEAF_SIZE {
-            if l.is_set(n) {
-                l.phi[n] = (l.phi[n] as Real + shift).clamp(-(bg as Real), bg as Real) as f32;
-            }
-        }
-    });
-    shift
 }
 
 const Z0: u64 = 0x0101_0101_0101_0101;

@@ -1,6 +1,7 @@
 //! OpenVDB writer for the level set (`surface`, FloatGrid, class `level set`) and its velocity
-//! (`v`, Vec3SGrid), in OpenVDB's own file format version 224 with a 5-4-3 tree and zip
-//! compression. vdb-rs only reads, and no maintained Rust crate writes VDB; the layout follows
+//! (`v`, Vec3SGrid), in OpenVDB's own file format version 224 with a 5-4-3 tree, zip and
+//! active-mask compression (leaf buffers hold their active values only, as OpenVDB writes level
+//! sets). vdb-rs only reads, and no maintained Rust crate writes VDB; the layout follows
 //! OpenVDB's `io/Archive.cc`, `io/Compression.h` and the node classes (facts in
 //! `shared/notes/vdb-format.md`, decision in `docs/decisions.md`).
 //!
@@ -15,14 +16,22 @@
 use crate::hash::Key;
 use crate::levelset::LevelSet;
 use crate::SurfaceError;
-use flate2::write::ZlibEncoder;
-use flate2::Compression;
+use flate2::{Compress, Compression, FlushCompress, Status};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
 
 const COMPRESS_ZIP: u32 = 1;
+/// `io::COMPRESS_ACTIVE_MASK`: leaf buffers may hold only their active values
+const COMPRESS_ACTIVE_MASK: u32 = 2;
+/// `io::Compression.h` per-buffer metadata: every inactive value is +background
+const NO_MASK_OR_INACTIVE_VALS: u8 = 0;
+/// every inactive value is −background
+const NO_MASK_AND_MINUS_BG: u8 = 1;
+/// inactive values are ±background, a selection mask (on: +background) follows
+const MASK_AND_NO_INACTIVE_VALS: u8 = 3;
+/// all 512 values follow
 const ALL_VALUES: u8 = 6;
 
 struct Out(Vec<u8>);
@@ -52,12 +61,12 @@ impl Out {
             self.0.extend_from_slice(&w.to_le_bytes());
         }
     }
-    /// OpenVDB `zipToStream`: i64 size then zlib data, or −size then raw bytes.
-    fn zipped(&mut self, raw: &[u8]) {
-        let mut e = ZlibEncoder::new(Vec::new(), Compression::fast());
-        let z = e.write_all(raw).and_then(|_| e.finish());
-        match z {
-            Ok(z) if z.len() < raw.len() => {
+    /// OpenVDB `zipToStream`: i64 size then zlib data, or −size then raw bytes. `c` is a
+    /// compressor reused from buffer to buffer (its state is reset here; allocating a new one
+    /// per leaf cost a few hundred kB each).
+    fn zipped(&mut self, raw: &[u8], c: &mut Compress) {
+        match zlib(c, raw) {
+            Some(z) if z.len() < raw.len() => {
                 self.i64(z.len() as i64);
                 self.0.extend_from_slice(&z);
             }
@@ -69,7 +78,21 @@ impl Out {
     }
     fn values(&mut self, raw: &[u8]) {
         self.u8(ALL_VALUES);
-        self.zipped(raw);
+        self.zipped(raw, &mut Compress::new(Compression::fast(), true));
+    }
+}
+
+/// zlib stream of `raw` (None: the compressor failed or the result is not smaller).
+fn zlib(c: &mut Compress, raw: &[u8]) -> Option<Vec<u8>> {
+    c.reset();
+    let mut z = Vec::with_capacity(raw.len() / 2 + 64);
+    loop {
+        let done = c.total_in() as usize;
+        match c.compress_vec(&raw[done..], &mut z, FlushCompress::Finish) {
+            Ok(Status::StreamEnd) => return Some(z),
+            Ok(_) if z.len() < raw.len() => z.reserve(raw.len() / 2 + 64),
+            _ => return None,
+        }
     }
 }
 
@@ -132,7 +155,7 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
     o.i64(0);
     o.i64(0);
     let grid_pos = o.0.len();
-    o.u32(COMPRESS_ZIP);
+    o.u32(COMPRESS_ZIP | COMPRESS_ACTIVE_MASK);
     // metadata
     let class = if kind == Kind::Surface {
         "level set"
@@ -222,19 +245,55 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
             // leaf buffers encoded in parallel, appended in order
             let bufs: Vec<Vec<u8>> = ls_sorted
                 .par_iter()
-                .map(|&l| {
-                    let leaf = &ls.leaves[l];
-                    let mut b = Out(Vec::new());
-                    b.mask(&leaf.active);
-                    let raw = match kind {
-                        Kind::Surface => f32_bytes(leaf.phi.iter().copied()),
-                        Kind::Velocity => {
-                            f32_bytes((0..512).flat_map(|n| leaf.vel_at(n).unwrap_or([0.0; 3])))
-                        }
-                    };
-                    b.values(&raw);
-                    b.0
-                })
+                .map_init(
+                    || Compress::new(Compression::fast(), true),
+                    |c, &l| {
+                        let leaf = &ls.leaves[l];
+                        let mut b = Out(Vec::new());
+                        b.mask(&leaf.active);
+                        let on = |n: usize| leaf.active[n >> 6] >> (n & 63) & 1 == 1;
+                        // OpenVDB's mask compression (what it writes for level sets itself): only the
+                        // active values, the inactive ones being ±background (a selection mask says
+                        // which) for φ and background (0) for the velocity
+                        let raw = match kind {
+                            Kind::Surface => {
+                                let (mut plus, mut minus, mut other) = (false, false, false);
+                                let mut sel = [0u64; 8];
+                                for n in (0..512).filter(|&n| !on(n)) {
+                                    let v = leaf.phi[n];
+                                    if v == bg {
+                                        plus = true;
+                                        sel[n >> 6] |= 1 << (n & 63);
+                                    } else if v == -bg {
+                                        minus = true;
+                                    } else {
+                                        other = true;
+                                    }
+                                }
+                                if other {
+                                    b.u8(ALL_VALUES);
+                                    b.zipped(&f32_bytes(leaf.phi.iter().copied()), c);
+                                    return b.0;
+                                }
+                                if plus && minus {
+                                    b.u8(MASK_AND_NO_INACTIVE_VALS);
+                                    b.mask(&sel);
+                                } else if minus {
+                                    b.u8(NO_MASK_AND_MINUS_BG);
+                                } else {
+                                    b.u8(NO_MASK_OR_INACTIVE_VALS);
+                                }
+                                f32_bytes((0..512).filter(|&n| on(n)).map(|n| leaf.phi[n]))
+                            }
+                            Kind::Velocity => {
+                                b.u8(NO_MASK_OR_INACTIVE_VALS);
+                                f32_bytes((0..512).filter_map(|n| leaf.vel_at(n)).flatten())
+                            }
+                        };
+                        b.zipped(&raw, c);
+                        b.0
+                    },
+                )
                 .collect();
             for b in bufs {
                 o.0.extend_from_slice(&b);

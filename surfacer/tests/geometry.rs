@@ -30,10 +30,10 @@ fn stats(v: impl Iterator<Item = Real>, h: Real) -> (Real, Real, Real) {
 
 #[test]
 fn sphere_of_volume_particles_matches_the_sphere() {
-    // jittered lattice (±0.1 Δ) in a ball of 12 Δ; default voxel Δ/2
+    // jittered lattice (±0.1 Δ) inside a ball of 12 Δ with an even surface layer; voxel Δ/2
     let dx = 0.05;
     let mut f = ParticleFrame::default();
-    let r = ball(
+    let r = shell_ball(
         &mut f,
         Vec3::zeros(),
         0.6,
@@ -64,18 +64,44 @@ fn sphere_of_volume_particles_matches_the_sphere() {
         100.0 * (vol / exact_vol - 1.0),
         m.tris.len()
     );
-    // systematic error within 0.05 and rms within a quarter voxel; the maximum (0.64 voxel) is
-    // where the lattice ball itself is faceted: along ⟨110⟩ its outermost (110) plane lies
-    // 0.28 Δ = 0.56 voxel inside the volume-equivalent sphere, and the surface follows the
-    // particles there
-    assert!(lmean.abs() < 0.05 && lrms < 0.25 && lmax < 0.7);
-    assert!(mmean.abs() < 0.05 && mrms < 0.25 && mmax < 0.7);
+    // the ball as a simulator leaves it (lattice interior, surface layer spread evenly on the
+    // sphere; see `shell_ball` and docs/decisions.md): systematic error within 0.05 voxel, rms
+    // within 0.15 and every level-set value and mesh vertex within half a voxel of the sphere
+    assert!(
+        lmean.abs() < 0.05 && lrms < 0.15 && lmax < 0.5,
+        "level set: mean {lmean} rms {lrms} max {lmax} voxels"
+    );
+    assert!(
+        mmean.abs() < 0.05 && mrms < 0.15 && mmax < 0.5,
+        "mesh: mean {mmean} rms {mrms} max {mmax} voxels"
+    );
     assert!((vol / exact_vol - 1.0).abs() < 0.02);
     assert_closed_manifold(m, "sphere");
     assert_eq!(m.components(), 1);
     // velocity carried to the mesh
     let mean_vx = m.vel.iter().map(|v| v.x).sum::<Real>() / m.vel.len() as Real;
     assert!((mean_vx - 1.0).abs() < 1e-3, "mean vx {mean_vx}");
+}
+
+#[test]
+fn faceted_lattice_ball_stays_within_its_facets() {
+    // the bare jittered lattice (±0.1 Δ) in a ball of 12 Δ, no surface layer: along ⟨110⟩ its
+    // outermost (110) plane lies 0.28 Δ = 0.56 voxel inside the volume-equivalent sphere and the
+    // surface follows the particles there (measured max 0.64 voxel), so only rms and mean are
+    // held to the sphere
+    let dx = 0.05;
+    let mut f = ParticleFrame::default();
+    let r = ball(&mut f, Vec3::zeros(), 0.6, dx, 0.2, Vec3::zeros());
+    let g = surface_particles(&f, &SurfaceOptions::default()).unwrap();
+    let h = g.stats.voxel;
+    let m = &g.mesh;
+    let (mmean, mrms, mmax) = stats(m.pos.iter().map(|p| p.norm() - r), h);
+    eprintln!("faceted ball: mesh mean {mmean:.3} rms {mrms:.3} max {mmax:.3} voxels");
+    assert!(
+        mmean.abs() < 0.05 && mrms < 0.25 && mmax < 0.7,
+        "mesh: mean {mmean} rms {mrms} max {mmax} voxels"
+    );
+    assert_closed_manifold(m, "faceted ball");
 }
 
 #[test]

@@ -135,3 +135,44 @@ fn bad_inputs_are_errors_naming_place_and_reason() {
     assert!(g.mesh.tris.is_empty());
     assert!(!surfacer::vdb::encode(&g.levelset).is_empty());
 }
+
+#[test]
+fn a_frame_handed_over_gives_the_same_geometry_as_a_borrowed_one() {
+    // surface_frame drops the frame after copying the volume particles out (f32 velocities);
+    // surface_particles reads it in place: same level set, meshes and velocities
+    let mut f = ParticleFrame::default();
+    shell_ball(
+        &mut f,
+        Vec3::zeros(),
+        0.3,
+        0.05,
+        0.2,
+        Vec3::new(0.25, -0.5, 1.0),
+    );
+    flat_sheet(&mut f, 0.6, 0.3, 0.02, 0.004);
+    helix(&mut f, 0.1, 0.05, 1.0, 0.01, 0.003);
+    let o = SurfaceOptions::default();
+    let a = surface_particles(&f, &o).unwrap();
+    let b = surfacer::surface_frame(f, &o).unwrap();
+    assert!(
+        a.levelset.leaves.len() > 20 && a.mesh.tris.len() > 1000,
+        "{} leaves, {} triangles",
+        a.levelset.leaves.len(),
+        a.mesh.tris.len()
+    );
+    assert_eq!(a.levelset.leaves.len(), b.levelset.leaves.len());
+    for (x, y) in a.levelset.leaves.iter().zip(&b.levelset.leaves) {
+        assert_eq!(x.origin, y.origin);
+        assert_eq!(x.phi, y.phi);
+        assert_eq!(x.vel, y.vel);
+    }
+    for (x, y) in [
+        (&a.mesh, &b.mesh),
+        (&a.sheets, &b.sheets),
+        (&a.filaments, &b.filaments),
+    ] {
+        assert_eq!(x.tris, y.tris);
+        assert_eq!(x.pos, y.pos);
+        assert_eq!(x.vel, y.vel);
+    }
+}

@@ -137,6 +137,20 @@ fn add_extras(f: &mut ParticleFrame, a: &SurfaceBenchArgs) {
     }
 }
 
+/// CPU seconds (user + system) of this process and of its waited-for children, from
+/// /proc/self/stat (clock ticks of 1/100 s, Linux's USER_HZ).
+fn cpu_times() -> (f64, f64) {
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // fields after the command name in parentheses: utime stime cutime cstime are 14–17
+    let rest = s.rsplit_once(')').map_or("", |r| r.1);
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .map(|x| x.parse::<f64>().unwrap_or(0.0))
+        .collect();
+    let at = |i: usize| f.get(i - 3).copied().unwrap_or(0.0) / 100.0;
+    (at(14) + at(15), at(16) + at(17))
+}
+
 /// Peak resident memory of a process (VmHWM, bytes), from /proc.
 fn peak_rss(pid: &str) -> Option<u64> {
     let s = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
@@ -156,21 +170,24 @@ fn which(name: &str) -> Option<std::path::PathBuf> {
     })
 }
 
-/// Runs splashsurf on the particles; returns (wall s, peak bytes, triangles if reported).
-fn run_splashsurf(bin: &Path, f: &ParticleFrame, radius: f64, dir: &Path) -> Result<(f64, u64)> {
-    let input = dir.join("blob.xyz");
-    let mut w = std::io::BufWriter::new(std::fs::File::create(&input)?);
+/// Writes the particles' positions as splashsurf's `.xyz` (f32 triples).
+fn write_xyz(f: &ParticleFrame, input: &Path) -> Result<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(input)?);
     for p in &f.pos {
         for c in [p.x, p.y, p.z] {
             w.write_all(&(c as f32).to_le_bytes())?;
         }
     }
     w.flush()?;
-    drop(w);
+    Ok(())
+}
+
+/// Runs splashsurf on the particles in `input` (`.xyz`); returns (wall s, peak bytes).
+fn run_splashsurf(bin: &Path, input: &Path, radius: f64, dir: &Path) -> Result<(f64, u64)> {
     let t = Instant::now();
     let mut child = Command::new(bin)
         .arg("reconstruct")
-        .arg(&input)
+        .arg(input)
         .arg("-o")
         .arg(dir.join("blob.ply"))
         .arg(format!("--particle-radius={radius}"))
@@ -190,11 +207,35 @@ fn run_splashsurf(bin: &Path, f: &ParticleFrame, radius: f64, dir: &Path) -> Res
         peak = peak.max(peak_rss(&pid).unwrap_or(0));
         std::thread::sleep(Duration::from_millis(5));
     }
-    Ok((t.elapsed().as_secs_f64(), peak))
+    // polling can miss the last milliseconds: the kernel's record of the waited-for children's
+    // largest resident set is exact (splashsurf is this process's only child)
+    Ok((t.elapsed().as_secs_f64(), peak.max(children_max_rss())))
+}
+
+/// Largest peak RSS (bytes) of this process's waited-for children (`getrusage(RUSAGE_CHILDREN)`),
+/// 0 where unavailable.
+fn children_max_rss() -> u64 {
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+    {
+        extern "C" {
+            fn getrusage(who: i32, usage: *mut i64) -> i32;
+        }
+        // struct rusage on x86-64 Linux: two timevals (4 × i64), then 14 longs, ru_maxrss (KiB)
+        // first among them
+        let mut r = [0i64; 18];
+        // SAFETY: r is as large as struct rusage and suitably aligned
+        if unsafe { getrusage(-1, r.as_mut_ptr()) } == 0 {
+            return r[4].max(0) as u64 * 1024;
+        }
+    }
+    0
 }
 
 /// Runs the benchmark and prints a markdown table.
 pub fn run(a: SurfaceBenchArgs) -> Result<()> {
+    // large stage buffers go back to the system when freed (surfacer::alloc), as in
+    // `codimfx surface`
+    surfacer::alloc::return_freed_memory();
     let t = Instant::now();
     let f = blob(&a);
     let gen = t.elapsed().as_secs_f64();
@@ -220,15 +261,32 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
     } else {
         &[true]
     };
-    let mut ours = (0.0, 0);
-    for &aniso in modes {
+    // splashsurf's input is written now: the frame is handed over to the surfacer (as
+    // `codimfx surface` does with each frame it reads), which frees it after taking the volume
+    // particles' data
+    let splash = which("splashsurf");
+    let dir = tempfile_dir()?;
+    let xyz = dir.join("blob.xyz");
+    if splash.is_some() {
+        write_xyz(&f, &xyz)?;
+    }
+    let n_volume = f.codim.iter().filter(|&&c| c == 0).count();
+    let mut f = Some(f);
+    let mut ours = (0.0, 0, 0.0);
+    for (m, &aniso) in modes.iter().enumerate() {
+        let frame = if m + 1 == modes.len() {
+            f.take().expect("frame")
+        } else {
+            f.clone().expect("frame")
+        };
         let mut o = SurfaceOptions {
             voxel_size: Some(radius),
             ..Default::default()
         };
         o.aniso.anisotropic = aniso;
         let t = Instant::now();
-        let g = surfacer::surface_particles(&f, &o)?;
+        let cpu0 = cpu_times().0;
+        let g = surfacer::surface_frame(frame, &o)?;
         let mut total = t.elapsed().as_secs_f64();
         let mut wt = 0.0;
         if let Some(dir) = &a.write {
@@ -240,7 +298,7 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
         }
         let peak = peak_rss("self").unwrap_or(0);
         let st = &g.stats;
-        let pvol = f.codim.iter().filter(|&&c| c == 0).count() as f64 * a.spacing.powi(3);
+        let pvol = n_volume as f64 * a.spacing.powi(3);
         println!(
             "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {:+.2} % |",
             if aniso { "anisotropic" } else { "isotropic" },
@@ -269,25 +327,32 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
             st.volume_shift
         );
         if aniso {
-            ours = (total, peak);
+            ours = (total, peak, cpu_times().0 - cpu0);
         }
     }
-    match which("splashsurf") {
+    match splash {
         Some(bin) => {
-            let dir = tempfile_dir()?;
-            let (ts, ps) = run_splashsurf(&bin, &f, radius, &dir)?;
+            let c0 = cpu_times().1;
+            let (ts, ps) = run_splashsurf(&bin, &xyz, radius, &dir)?;
+            let cs = cpu_times().1 - c0;
             let _ = std::fs::remove_dir_all(&dir);
             println!(
-                "\nsplashsurf (isotropic): {ts:.2} s, peak RSS {:.0} MB",
+                "\nsplashsurf (isotropic): {ts:.2} s, CPU {cs:.2} s, peak RSS {:.0} MB",
                 ps as f64 / 1e6
             );
             println!(
-                "codimfx anisotropic / splashsurf: time × {:.2}, memory × {:.2}",
+                "codimfx anisotropic: {:.2} s, CPU {:.2} s (user + system, surfacing and writing)",
+                ours.0, ours.2
+            );
+            println!(
+                "codimfx anisotropic / splashsurf: time × {:.2}, CPU × {:.2}, memory × {:.2}",
                 ours.0 / ts,
+                ours.2 / cs.max(0.01),
                 ours.1 as f64 / ps as f64
             );
         }
         None => {
+            let _ = std::fs::remove_dir_all(&dir);
             println!("\nsplashsurf: not on PATH, comparison skipped (cargo install splashsurf)")
         }
     }

@@ -160,19 +160,32 @@ pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
                 let at =
                     |l: [i32; 3], axis: usize| ((l[0] * 9 + l[1]) * 9 + l[2]) as usize * 3 + axis;
                 let mut used: Vec<usize> = Vec::new();
+                // φ at the 9³ corners of the block's cells, fetched once (index (x·9 + y)·9 + z);
+                // velocities are fetched only for the corners of crossing edges
+                let mut pv = [0f32; 729];
+                for x in 0..=LEAF_DIM {
+                    for y in 0..=LEAF_DIM {
+                        for z in 0..=LEAF_DIM {
+                            pv[((x * 9 + y) * 9 + z) as usize] = nb.phi(o, [x, y, z]);
+                        }
+                    }
+                }
+                const OFF: [usize; 8] = [0, 1, 9, 10, 81, 82, 90, 91];
                 for x in 0..LEAF_DIM {
                     for y in 0..LEAF_DIM {
                         for z in 0..LEAF_DIM {
-                            let mut val = [(0f32, None); 8];
+                            let base = ((x * 9 + y) * 9 + z) as usize;
                             let mut mask = 0usize;
-                            for (c, v) in val.iter_mut().enumerate() {
-                                let d = corner(c as u8);
-                                *v = nb.at(o, [x + d[0], y + d[1], z + d[2]]);
-                                mask |= ((v.0 < 0.0) as usize) << c;
+                            for (c, off) in OFF.iter().enumerate() {
+                                mask |= ((pv[base + off] < 0.0) as usize) << c;
                             }
                             if mask == 0 || mask == 255 {
                                 continue;
                             }
+                            let val = |c: u8| {
+                                let d = corner(c);
+                                nb.at(o, [x + d[0], y + d[1], z + d[2]])
+                            };
                             let mut vid = [u32::MAX; 12];
                             for t in &table[mask] {
                                 let mut tri = [0u32; 3];
@@ -184,8 +197,8 @@ pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
                                         let l = [x + ca[0], y + ca[1], z + ca[2]];
                                         let sl = at(l, axis);
                                         if slot[sl] == u32::MAX {
-                                            let (pa, va) = val[a as usize];
-                                            let (pb, vb) = val[b as usize];
+                                            let (pa, va) = val(a);
+                                            let (pb, vb) = val(b);
                                             let tt = (pa as Real / (pa as Real - pb as Real))
                                                 .clamp(0.0, 1.0);
                                             let g = [o[0] + l[0], o[1] + l[1], o[2] + l[2]];

@@ -159,6 +159,17 @@ struct Nbhd<'a> {
 }
 
 impl Nbhd<'_> {
+    /// φ at local coordinates `l` (0..=8) of the block at `o`.
+    #[inline]
+    fn phi(&self, o: [i32; 3], l: [i32; 3]) -> f32 {
+        let s = ((l[0] >= LEAF_DIM) as usize) << 2
+            | ((l[1] >= LEAF_DIM) as usize) << 1
+            | (l[2] >= LEAF_DIM) as usize;
+        match self.leaves[s] {
+            Some(leaf) => leaf.phi[voxel_index([o[0] + l[0], o[1] + l[1], o[2] + l[2]])],
+            None => self.tile[s],
+        }
+    }
     #[inline]
     fn at(&self, o: [i32; 3], l: [i32; 3]) -> (f32, Option<[f32; 3]>) {
         let s = ((l[0] >= LEAF_DIM) as usize) << 2
@@ -412,6 +423,7 @@ fn merge_blocks(parts: Vec<BlockMesh>) -> TriMesh {
         }
         tris.extend(t.iter().map(|t| t.map(|i| i + off)));
     }
+    crate::alloc::trim();
     keys.par_sort_unstable();
     let mut remap = vec![0u32; nv];
     let mut pos = Vec::new();

@@ -104,3 +104,52 @@ pub fn helix(f: &mut ParticleFrame, a: Real, b: Real, turns: Real, ds: Real, rt:
     }
     n + 1
 }
+
+/// A ball of volume particles as a simulator leaves it at a free surface: a jittered lattice
+/// (spacing `dx`, jitter `jit`·dx) strictly inside `r - dx`, and a surface layer of particles
+/// spread evenly (Fibonacci spiral, radial jitter `jit`·dx/2) on the sphere of radius `r - dx/2`,
+/// so the outermost particles sit half a spacing inside the surface on every direction instead of
+/// on a faceted lattice. The layer holds as many particles as bring the total volume (count·dx³)
+/// to that of the ball of radius `r`. Returns the volume-equivalent radius.
+pub fn shell_ball(f: &mut ParticleFrame, c: Vec3, r: Real, dx: Real, jit: Real, v: Vec3) -> Real {
+    let n = (r / dx).ceil() as i32 + 1;
+    let mut s = 12345u64;
+    let before = f.len();
+    let add = |f: &mut ParticleFrame, q: Vec3| {
+        let id = f.len() as u32;
+        f.push(
+            q,
+            v,
+            id,
+            0,
+            pscale_of(dx),
+            RHO * dx * dx * dx,
+            Vec3::zeros(),
+        );
+    };
+    for i in -n..=n {
+        for j in -n..=n {
+            for k in -n..=n {
+                let p = Vec3::new(i as Real, j as Real, k as Real) * dx;
+                if p.norm() < r - dx {
+                    let mut jv = || (rand01(&mut s) - 0.5) * jit * dx;
+                    let q = c + p + Vec3::new(jv(), jv(), jv());
+                    add(f, q);
+                }
+            }
+        }
+    }
+    let total = (4.0 / 3.0 * std::f64::consts::PI * (r / dx).powi(3)).round() as usize;
+    let shell = total.saturating_sub(f.len() - before);
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    for i in 0..shell {
+        let z = 1.0 - (2.0 * i as Real + 1.0) / shell as Real;
+        let rho = (1.0 - z * z).sqrt();
+        let t = golden * i as Real;
+        let dir = Vec3::new(rho * t.cos(), rho * t.sin(), z);
+        let rr = r - 0.5 * dx + (rand01(&mut s) - 0.5) * 0.5 * jit * dx;
+        add(f, c + rr * dir);
+    }
+    let count = (f.len() - before) as Real;
+    (3.0 * count / (4.0 * std::f64::consts::PI)).cbrt() * dx
+}
