@@ -4,7 +4,7 @@
 //! per-frame record (stage times, solver figures, transition and reseeding
 //! counts). No grid is allocated and the grid stages report 0 s.
 
-use super::step::step_with_retry;
+use super::step::{film_speed, step_with_retry};
 use super::{FilmError, FilmParams, FilmState, Wind};
 use crate::gas::GasPocket;
 use crate::io::manifest::FrameRecord;
@@ -40,6 +40,15 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
     }
     if !f.reseed {
         prm.reseed = None;
+    }
+    // rings pulled apart stretch the film along one direction only: fill the
+    // empty lines of the reseeding grid too (`ReseedParams::gap_lines`)
+    let moving_rings = s
+        .films
+        .iter()
+        .any(|b| matches!(b, FilmBody::Cylinder { ring_speed, .. } if *ring_speed != 0.0));
+    if let Some(r) = prm.reseed.as_mut() {
+        r.gap_lines = moving_rings;
     }
     prm.solver = BicgstabParams {
         tol: f.solver_tolerance,
@@ -119,7 +128,7 @@ pub fn advance(
     let (mut n, mut dmin, mut dmax) = (0u32, Real::INFINITY, 0.0 as Real);
     while t < t_end {
         let rem = t_end - t;
-        let vmax = p.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+        let vmax = film_speed(p);
         let mut dt = s.time.max_dt;
         if vmax > 0.0 {
             dt = dt.min(s.film.cfl * sp / vmax);
@@ -168,6 +177,7 @@ pub fn advance(
         a.filament_removed += b.filament_removed;
         a.absorbed += b.absorbed;
         a.light_merged += b.light_merged;
+        a.boundary_absorbed += b.boundary_absorbed;
         a.filament_skipped += b.filament_skipped;
         rec.fallbacks.step_halvings += halvings as u64;
         if s.film.max_speed > 0.0 {
