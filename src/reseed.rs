@@ -425,12 +425,10 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
     }
     let pts: Vec<Vec3> = idx.iter().map(|&i| parts.x[i]).collect();
     let grid = CellGrid::build(&pts, prm.h);
-    let mut alive = vec![true; parts.len()];
-    let mut n = 0;
-    for (a, &p) in idx.iter().enumerate() {
-        if parts.fixed[p] || !alive[p] {
-            continue;
-        }
+    // The light test of `p` given the current masses and survivors: the
+    // nearest alive non-fixed neighbour when p is light.
+    let test = |a: usize, parts: &Particles, alive: &[bool]| -> Option<usize> {
+        let p = idx[a];
         let (mut sum, mut cnt) = (0.0, 0usize);
         let mut best: Option<(Real, usize)> = None;
         grid.for_each_within(&pts, &pts[a], prm.h, |b, d2| {
@@ -443,11 +441,42 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
                 }
             }
         });
-        let Some((_, q)) = best else { continue };
-        if parts.mass[p] < prm.light_fraction * sum / cnt as Real {
+        let (_, q) = best?;
+        (parts.mass[p] < prm.light_fraction * sum / cnt as Real).then_some(q)
+    };
+    // The sequential pass below visits the particles in order and merges
+    // each light one at once, which changes its neighbours' tests. The tests
+    // of all particles against the initial state run in parallel first; in
+    // the pass a particle is re-tested only when it was light initially or a
+    // merge happened within h of it (its test inputs changed), so the result
+    // is the one of testing every particle in turn, at a fraction of the cost.
+    let all_alive = vec![true; parts.len()];
+    let view: &Particles = parts;
+    let light0: Vec<bool> = (0..idx.len())
+        .into_par_iter()
+        .map(|a| !view.fixed[idx[a]] && test(a, view, &all_alive).is_some())
+        .collect();
+    let pos: Vec<usize> = {
+        let mut v = vec![usize::MAX; parts.len()];
+        for (a, &i) in idx.iter().enumerate() {
+            v[i] = a;
+        }
+        v
+    };
+    let mut dirty = light0;
+    let mut alive = vec![true; parts.len()];
+    let mut n = 0;
+    for (a, &p) in idx.iter().enumerate() {
+        if parts.fixed[p] || !alive[p] || !dirty[a] {
+            continue;
+        }
+        if let Some(q) = test(a, parts, &alive) {
             merge_into(parts, q, p);
             alive[p] = false;
             n += 1;
+            for c in [a, pos[q]] {
+                grid.for_each_within(&pts, &pts[c], prm.h, |b, _| dirty[b] = true);
+            }
         }
     }
     parts.retain(&alive);

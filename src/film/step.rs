@@ -16,8 +16,9 @@
 //!    the sheet weight in filament fits set to 0 (§7).
 //!
 //! Neighbourhoods and frames are built once after advection; stages 4–6
-//! reuse them (and the Laplacian rows of the reseeding's fit pass) when
-//! stages 2–3 changed nothing, and rebuild them once otherwise.
+//! reuse them when stages 2–3 changed nothing, and rebuild them once
+//! otherwise. The reseeding fits only the particles that propose a new one;
+//! the tension rows are fitted once, in stage 6.
 //!
 //! The step works on a sub-store of the sheet and filament particles in
 //! joint order (sheets then filaments) so that neighbour lists, frames and
@@ -32,9 +33,8 @@ use crate::area::{
 use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_force};
 use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
 use crate::math::{Mat3, Real, Vec3};
-use crate::mls::laplacian::{row_entries, Rows};
-use crate::mls::operators::{par_fit_map, par_frames, Neighborhoods};
-use crate::mls::{FitStats, Frame, JointLaplacian, MlsParams};
+use crate::mls::operators::{fit_particle, par_frames, Neighborhoods};
+use crate::mls::{Frame, JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
 use crate::reseed::{reseed_guarded, LocalShape};
 use crate::tension::{
@@ -51,32 +51,45 @@ use std::time::Instant;
 struct Kept {
     nb: Neighborhoods,
     frames: Vec<Frame>,
-    rows: Option<(Rows, FitStats)>,
 }
 
-/// Local geometry of every joint particle, as a Taylor quadratic of its fit
-/// (scaled coordinates η = ξ/h): slope and second derivatives at η = 0.
-struct FittedShape {
-    h: Real,
-    geo: Vec<Option<([Real; 2], [Real; 3])>>,
+/// Local geometry of a joint particle for the reseeding, as the Taylor
+/// quadratic of its MLS fit (scaled coordinates η = ξ/h): slope and second
+/// derivatives at η = 0. Fitted on demand: only particles that propose a new
+/// particle need it (a few per step), so the reseeding no longer fits every
+/// particle (`docs/benchmarks.md`, "bench films").
+struct FittedShape<'a> {
+    nb: &'a Neighborhoods,
+    frames: &'a [Frame],
+    mls: &'a MlsParams,
 }
 
-impl LocalShape for FittedShape {
+impl FittedShape<'_> {
+    fn geo(&self, p: usize) -> Option<([Real; 2], [Real; 3])> {
+        fit_particle(self.nb, p, &self.frames[p], self.mls)
+            .fit()
+            .map(|f| (f.slope, f.second))
+    }
+}
+
+impl LocalShape for FittedShape<'_> {
     fn height(&self, p: usize, u: Real, v: Real) -> Real {
-        let Some((s, d)) = self.geo[p] else {
+        let Some((s, d)) = self.geo(p) else {
             return 0.0;
         };
-        let (a, b) = (u / self.h, v / self.h);
-        self.h * (s[0] * a + s[1] * b + 0.5 * (d[0] * a * a + 2.0 * d[1] * a * b + d[2] * b * b))
+        let h = self.mls.h;
+        let (a, b) = (u / h, v / h);
+        h * (s[0] * a + s[1] * b + 0.5 * (d[0] * a * a + 2.0 * d[1] * a * b + d[2] * b * b))
     }
     fn curve(&self, p: usize, u: Real) -> (Real, Real) {
-        let Some((s, d)) = self.geo[p] else {
+        let Some((s, d)) = self.geo(p) else {
             return (0.0, 0.0);
         };
-        let a = u / self.h;
+        let h = self.mls.h;
+        let a = u / h;
         (
-            self.h * (s[0] * a + 0.5 * d[0] * a * a),
-            self.h * (s[1] * a + 0.5 * d[1] * a * a),
+            h * (s[0] * a + 0.5 * d[0] * a * a),
+            h * (s[1] * a + 0.5 * d[1] * a * a),
         )
     }
 }
@@ -180,9 +193,9 @@ pub fn step(
         sheet_weight_in_filament: 0.0,
         ..prm.mls
     };
-    // neighbourhoods, frames and (speculatively) the tension Laplacian rows of
-    // stage 2, reused by stages 4–6 when neither the transitions nor the
-    // reseeding changed the particle set (same positions, same joint order)
+    // neighbourhoods and frames of stage 2, reused by stages 4–6 when neither
+    // the transitions nor the reseeding changed the particle set (same
+    // positions, same joint order)
     let mut kept: Option<Kept> = None;
     if !film.is_empty() && (prm.transitions.is_some() || prm.reseed.is_some()) {
         let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
@@ -263,26 +276,12 @@ pub fn step(
         info.timings.transition = t.elapsed().as_secs_f64();
         // 3. reseeding
         let t = Instant::now();
-        let mut rows = None;
         if let Some(rp) = &prm.reseed {
-            // one fit pass gives the reseeding's local shapes and, when the
-            // transitions left the set alone, the rows of the tension
-            // Laplacian (used if the reseeding changes nothing either)
-            let christoffel = geom_mls.christoffel;
-            let speculate = info.transitions.total() == 0;
-            let (both, stats) = par_fit_map(&nb, &frames, &geom_mls, |_, f| {
-                f.map_or((None, Vec::new()), |f| {
-                    let row = if speculate {
-                        row_entries(f, christoffel)
-                    } else {
-                        Vec::new()
-                    };
-                    (Some((f.slope, f.second)), row)
-                })
-            });
-            let (geo, r): (Vec<_>, Vec<_>) = both.into_iter().unzip();
-            rows = speculate.then_some((r, stats));
-            let shape = FittedShape { h, geo };
+            let shape = FittedShape {
+                nb: &nb,
+                frames: &frames,
+                mls: &geom_mls,
+            };
             // filament insertion only along line-like filament frames (the
             // frame of a particle that was a sheet until this step is a
             // sheet frame; a clump has no tangent)
@@ -300,7 +299,7 @@ pub fn step(
             && r.sheet_inserted + r.sheet_removed + r.filament_inserted + r.filament_removed == 0
             && r.absorbed + r.light_merged + r.boundary_absorbed == 0;
         if unchanged {
-            kept = Some(Kept { nb, frames, rows });
+            kept = Some(Kept { nb, frames });
         }
     } else {
         info.timings.transition = t.elapsed().as_secs_f64();
@@ -319,15 +318,15 @@ pub fn step(
 
     // 4. areas, thickness, explicit forces
     let t = Instant::now();
-    let (nb, frames, rows) = match kept {
+    let (nb, frames) = match kept {
         Some(k) => {
             info.reused_neighborhoods = true;
-            (k.nb, k.frames, k.rows)
+            (k.nb, k.frames)
         }
         None => {
             let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
             let frames = par_frames(&nb, &geom_mls);
-            (nb, frames, None)
+            (nb, frames)
         }
     };
     let n = film.len();
@@ -487,10 +486,7 @@ pub fn step(
 
     // 6. semi-implicit surface tension (eq. 16)
     let t = Instant::now();
-    let l = match rows {
-        Some((rows, stats)) => JointLaplacian::from_rows(&nb, rows, stats)?,
-        None => JointLaplacian::assemble_with_frames(&nb, &frames, &geom_mls)?,
-    };
+    let l = JointLaplacian::assemble_with_frames(&nb, &frames, &geom_mls)?;
     info.fits = l.stats;
     info.timings.operators = t.elapsed().as_secs_f64();
     let t = Instant::now();
