@@ -30,7 +30,7 @@ use crate::area::{
     filament_areas, filament_length, filament_radius, sheet_half_thickness, surface_tension_area,
     voronoi_area,
 };
-use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_force};
+use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_drag};
 use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
 use crate::math::{Mat3, Real, Vec3};
 use crate::mls::operators::{fit_particle, par_frames, Neighborhoods};
@@ -427,6 +427,7 @@ pub fn step(
         f[i] += prm.gravity * film.mass[i] - film.v[i] * (prm.damping * film.mass[i]);
     }
     // enclosed gas and wind act along the sheet normals
+    let mut drag: Vec<Real> = Vec::new();
     if state.gas.is_some() || prm.wind.is_some() {
         let mut normals: Vec<Vec3> = frames[..n_sheet].iter().map(|fr| fr.axis(2)).collect();
         let sheet_nbrs: Vec<Vec<u32>> = (0..n_sheet)
@@ -461,15 +462,20 @@ pub fn step(
             }
         }
         if let Some(w) = &prm.wind {
+            drag = vec![0.0; n];
             for i in 0..n_sheet {
-                f[i] += wind_force(
+                // one-face area: the wind's pressure acts across the film;
+                // implicit in the normal velocity (`gas::wind_drag`)
+                let (d, fw) = wind_drag(
                     &w.velocity,
                     &film.v[i],
                     &normals[i],
-                    area[i],
+                    voronoi[i],
                     w.air_density,
                     w.drag,
                 );
+                drag[i] = d;
+                f[i] += fw;
             }
         }
     }
@@ -498,6 +504,7 @@ pub fn step(
         u: &u,
         f_explicit: &f,
         fixed: &film.fixed,
+        drag: &drag,
         sigma: prm.sigma,
         dt,
     };
