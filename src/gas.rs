@@ -201,8 +201,9 @@ pub fn wind_force(
     rho_air: Real,
     drag: Real,
 ) -> Vec3 {
-    let rel = (wind - u).dot(normal);
-    normal * (drag * rho_air * area * rel * rel.abs())
+    // the split of [`wind_drag`] evaluated at the current velocity
+    let (d, f) = wind_drag(wind, u, normal, area, rho_air, drag);
+    f - u * d
 }
 
 /// The wind drag of [`wind_force`] split for an implicit step: a drag

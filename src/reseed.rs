@@ -118,6 +118,20 @@ pub struct ReseedCounts {
     pub filament_skipped: u64,
 }
 
+impl ReseedCounts {
+    /// Adds the counts of `o`.
+    pub fn add(&mut self, o: &ReseedCounts) {
+        self.sheet_inserted += o.sheet_inserted;
+        self.sheet_removed += o.sheet_removed;
+        self.filament_inserted += o.filament_inserted;
+        self.filament_removed += o.filament_removed;
+        self.absorbed += o.absorbed;
+        self.light_merged += o.light_merged;
+        self.boundary_absorbed += o.boundary_absorbed;
+        self.filament_skipped += o.filament_skipped;
+    }
+}
+
 /// The local surface (sheets) or curve (filaments) of particle p in its own
 /// frame, as fitted by MLS: `height(p, ξ¹, ξ²)` returns ξ³ on a sheet, and
 /// `curve(p, ξ¹)` returns (ξ², ξ³) on a filament.
@@ -490,35 +504,46 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
 /// it a light rim particle, pulled by the rim tension 2σl, overtakes the
 /// sheet instead of collecting it.
 fn absorb_into_rims(parts: &mut Particles, prm: &ReseedParams) -> u64 {
-    let r = prm.absorb_distance * prm.h;
-    if r <= 0.0 {
+    absorb_nearest(
+        parts,
+        prm.absorb_distance * prm.h,
+        |p, i| p.codim[i] == Codim::Filament,
+        |p, i| p.codim[i] == Codim::Sheet && !p.fixed[i],
+    )
+}
+
+/// Merges every particle with `absorbed(i)` into the nearest particle with
+/// `target(j)` closer than `r` (mass and momentum added; the target keeps its
+/// position and radius, a fixed target its velocity). Returns the count.
+fn absorb_nearest(
+    parts: &mut Particles,
+    r: Real,
+    target: impl Fn(&Particles, usize) -> bool,
+    absorbed: impl Fn(&Particles, usize) -> bool,
+) -> u64 {
+    let tg: Vec<usize> = (0..parts.len()).filter(|&i| target(parts, i)).collect();
+    if r <= 0.0 || tg.is_empty() {
         return 0;
     }
-    let fil: Vec<usize> = (0..parts.len())
-        .filter(|&i| parts.codim[i] == Codim::Filament)
-        .collect();
-    if fil.is_empty() {
-        return 0;
-    }
-    let fx: Vec<Vec3> = fil.iter().map(|&i| parts.x[i]).collect();
-    let grid = CellGrid::build(&fx, r);
+    let tx: Vec<Vec3> = tg.iter().map(|&i| parts.x[i]).collect();
+    let grid = CellGrid::build(&tx, r);
     let mut alive = vec![true; parts.len()];
     let mut n = 0;
     for i in 0..parts.len() {
-        if parts.codim[i] != Codim::Sheet || parts.fixed[i] {
+        if !absorbed(parts, i) {
             continue;
         }
         let mut best: Option<(Real, usize)> = None;
-        grid.for_each_within(&fx, &parts.x[i], r, |b, d2| {
+        grid.for_each_within(&tx, &parts.x[i], r, |b, d2| {
             if best.is_none_or(|(bd, bb)| d2 < bd || (d2 == bd && b < bb)) {
                 best = Some((d2, b));
             }
         });
         if let Some((_, b)) = best {
-            let q = fil[b];
-            let r = parts.radius[q];
+            let q = tg[b];
+            let rq = parts.radius[q];
             merge_into(parts, q, i);
-            parts.radius[q] = r; // the rim keeps its tube radius; it is recomputed from mass
+            parts.radius[q] = rq; // a rim keeps its tube radius; it is recomputed from mass
             alive[i] = false;
             n += 1;
         }
@@ -537,33 +562,12 @@ fn absorb_into_rims(parts: &mut Particles, prm: &ReseedParams) -> u64 {
 /// frames, coarse probe). Sheet particles next to a ring are the film's
 /// attachment and are left alone.
 fn absorb_into_boundary(parts: &mut Particles, prm: &ReseedParams) -> u64 {
-    let r = prm.absorb_distance * prm.h;
-    let fixed: Vec<usize> = (0..parts.len()).filter(|&i| parts.fixed[i]).collect();
-    if r <= 0.0 || fixed.is_empty() {
-        return 0;
-    }
-    let bx: Vec<Vec3> = fixed.iter().map(|&i| parts.x[i]).collect();
-    let grid = CellGrid::build(&bx, r);
-    let mut alive = vec![true; parts.len()];
-    let mut n = 0;
-    for i in 0..parts.len() {
-        if parts.codim[i] != Codim::Filament || parts.fixed[i] {
-            continue;
-        }
-        let mut best: Option<(Real, usize)> = None;
-        grid.for_each_within(&bx, &parts.x[i], r, |b, d2| {
-            if best.is_none_or(|(bd, bb)| d2 < bd || (d2 == bd && b < bb)) {
-                best = Some((d2, b));
-            }
-        });
-        if let Some((_, b)) = best {
-            merge_into(parts, fixed[b], i);
-            alive[i] = false;
-            n += 1;
-        }
-    }
-    parts.retain(&alive);
-    n
+    absorb_nearest(
+        parts,
+        prm.absorb_distance * prm.h,
+        |p, i| p.fixed[i],
+        |p, i| p.codim[i] == Codim::Filament && !p.fixed[i],
+    )
 }
 
 /// Reseeds sheets and filaments (Algorithm 1, line 3). `frames[i]` and

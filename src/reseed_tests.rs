@@ -22,6 +22,14 @@ fn flat_sheet(n: usize, s: Real, hole: Option<(usize, usize)>) -> Particles {
     p
 }
 
+/// Reseeds `p` with identity frames (a sheet in the xy plane, filaments
+/// along x) and neighbour lists within h.
+fn reseed_identity(p: &mut Particles, shape: &dyn LocalShape, prm: &ReseedParams) -> ReseedCounts {
+    let frames = vec![Mat3::identity(); p.len()];
+    let nl = neighbor_lists(&p.x, prm.h);
+    reseed(p, &frames, |i| nl.of(i), shape, prm)
+}
+
 fn momentum(p: &Particles) -> Vec3 {
     (0..p.len()).map(|i| p.v[i] * p.mass[i]).sum()
 }
@@ -32,15 +40,7 @@ fn hole_in_sheet_is_filled_once_conserving_mass_and_momentum() {
     let s = 0.4 * h; // one particle per tangent cell
     let mut p = flat_sheet(11, s, Some((5, 5)));
     let (m0, j0) = (p.total_mass(), momentum(&p));
-    let frames = vec![Mat3::identity(); p.len()];
-    let nl = neighbor_lists(&p.x, h);
-    let c = reseed(
-        &mut p,
-        &frames,
-        |i| nl.of(i),
-        &FlatShape,
-        &ReseedParams::paper(h),
-    );
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
     assert_eq!(c.sheet_inserted, 1, "{c:?}");
     assert_eq!(c.sheet_removed, 0);
     let new = p.len() - 1;
@@ -62,15 +62,7 @@ fn new_particle_lies_on_the_fitted_surface() {
     }
     let h = 0.1;
     let mut p = flat_sheet(11, 0.4 * h, Some((5, 5)));
-    let frames = vec![Mat3::identity(); p.len()];
-    let nl = neighbor_lists(&p.x, h);
-    reseed(
-        &mut p,
-        &frames,
-        |i| nl.of(i),
-        &Bowl,
-        &ReseedParams::paper(h),
-    );
+    reseed_identity(&mut p, &Bowl, &ReseedParams::paper(h));
     let new = *p.id.last().unwrap();
     let k = p.id.iter().position(|&i| i == new).unwrap();
     // seeded by some neighbour q: z = |x_new - x_q|² in q's frame
@@ -90,15 +82,7 @@ fn close_pairs_are_merged_conserving_mass_and_momentum() {
         Codim::Sheet,
     );
     let (m0, j0, n0) = (p.total_mass(), momentum(&p), p.len());
-    let frames = vec![Mat3::identity(); p.len()];
-    let nl = neighbor_lists(&p.x, h);
-    let c = reseed(
-        &mut p,
-        &frames,
-        |i| nl.of(i),
-        &FlatShape,
-        &ReseedParams::paper(h),
-    );
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
     assert_eq!(c.sheet_removed, 1);
     assert_eq!(c.sheet_inserted, 0);
     assert_eq!(p.len(), n0 - 1);
@@ -123,15 +107,7 @@ fn stretched_filament_gains_a_particle_in_each_gap() {
         );
     }
     let m0 = p.total_mass();
-    let frames = vec![Mat3::identity(); p.len()];
-    let nl = neighbor_lists(&p.x, h);
-    let c = reseed(
-        &mut p,
-        &frames,
-        |i| nl.of(i),
-        &FlatShape,
-        &ReseedParams::paper(h),
-    );
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
     assert_eq!(c.filament_inserted, 1, "{c:?}");
     assert!(p
         .x
@@ -154,15 +130,7 @@ fn fixed_particles_are_never_removed() {
     );
     p.fixed[1] = true;
     p.fixed[0] = true;
-    let frames = vec![Mat3::identity(); 2];
-    let nl = neighbor_lists(&p.x, h);
-    let c = reseed(
-        &mut p,
-        &frames,
-        |i| nl.of(i),
-        &FlatShape,
-        &ReseedParams::paper(h),
-    );
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
     assert_eq!(c.sheet_removed, 0);
     assert_eq!(p.len(), 2);
 }
@@ -180,16 +148,8 @@ fn gap_lines_fill_a_sheet_stretched_in_one_direction() {
             base.push(x, Vec3::new(0.0, 0.1, 0.0), 1.0, 0.01, Codim::Sheet);
         }
     }
-    let frames = vec![Mat3::identity(); base.len()];
-    let nl = neighbor_lists(&base.x, h);
     let mut off = base.clone();
-    let c = reseed(
-        &mut off,
-        &frames,
-        |i| nl.of(i),
-        &FlatShape,
-        &ReseedParams::paper(h),
-    );
+    let c = reseed_identity(&mut off, &FlatShape, &ReseedParams::paper(h));
     assert_eq!(c.sheet_inserted, 0, "{c:?}");
     let prm = ReseedParams {
         gap_lines: true,
@@ -197,7 +157,7 @@ fn gap_lines_fill_a_sheet_stretched_in_one_direction() {
     };
     let (m0, j0) = (base.total_mass(), momentum(&base));
     let mut on = base.clone();
-    let c = reseed(&mut on, &frames, |i| nl.of(i), &FlatShape, &prm);
+    let c = reseed_identity(&mut on, &FlatShape, &prm);
     assert!(c.sheet_inserted > 0, "{c:?}");
     for k in base.len()..on.len() {
         // halfway between two rows (y = (j + 1/2) 0.6 h), inside the sheet
@@ -243,15 +203,7 @@ fn rim_particles_reaching_a_ring_merge_into_it_and_the_ring_keeps_its_motion() {
         Codim::Filament,
     );
     let m0 = p.total_mass();
-    let frames = vec![Mat3::identity(); p.len()];
-    let nl = neighbor_lists(&p.x, h);
-    let c = reseed(
-        &mut p,
-        &frames,
-        |i| nl.of(i),
-        &FlatShape,
-        &ReseedParams::paper(h),
-    );
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
     assert_eq!(c.boundary_absorbed, 1, "{c:?}");
     assert_eq!(p.len(), 11);
     assert!((p.total_mass() - m0).abs() < 1e-12 * m0);

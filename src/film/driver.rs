@@ -112,6 +112,24 @@ pub fn frame_vectors(p: &Particles, h: Real) -> Vec<Vec3> {
     out
 }
 
+/// Length of the next substep with `rem` seconds of the frame left: at
+/// most `max_dt`, motion at most `cfl` × `spacing` at speed `vmax`, and the
+/// rest of the frame split in two rather than leaving a sliver. Returns the
+/// substep and whether it ends the frame.
+pub fn substep(max_dt: Real, cfl: Real, spacing: Real, vmax: Real, rem: Real) -> (Real, bool) {
+    let mut dt = max_dt;
+    if vmax > 0.0 {
+        dt = dt.min(cfl * spacing / vmax);
+    }
+    if dt >= rem {
+        (rem, true)
+    } else if dt > 0.5 * rem {
+        (0.5 * rem, false)
+    } else {
+        (dt, false)
+    }
+}
+
 /// Advances the film from `t` to `t_end`, filling the frame record. Returns
 /// the number of substeps and the step range (min, max).
 pub fn advance(
@@ -127,18 +145,7 @@ pub fn advance(
     let sp = spacing(s);
     let (mut n, mut dmin, mut dmax) = (0u32, Real::INFINITY, 0.0 as Real);
     while t < t_end {
-        let rem = t_end - t;
-        let vmax = film_speed(p);
-        let mut dt = s.time.max_dt;
-        if vmax > 0.0 {
-            dt = dt.min(s.film.cfl * sp / vmax);
-        }
-        let last = dt >= rem;
-        if last {
-            dt = rem;
-        } else if dt > 0.5 * rem {
-            dt = 0.5 * rem;
-        }
+        let (dt, last) = substep(s.time.max_dt, s.film.cfl, sp, film_speed(p), t_end - t);
         let (info, halvings) = step_with_retry(p, st, prm, dt, 4)?;
         t = if last { t_end } else { t + dt };
         n += 1;
@@ -170,15 +177,7 @@ pub fn advance(
             }
         }
         rec.transitions.add(&info.transitions);
-        let (a, b) = (&mut rec.reseed, &info.reseed);
-        a.sheet_inserted += b.sheet_inserted;
-        a.sheet_removed += b.sheet_removed;
-        a.filament_inserted += b.filament_inserted;
-        a.filament_removed += b.filament_removed;
-        a.absorbed += b.absorbed;
-        a.light_merged += b.light_merged;
-        a.boundary_absorbed += b.boundary_absorbed;
-        a.filament_skipped += b.filament_skipped;
+        rec.reseed.add(&info.reseed);
         rec.fallbacks.step_halvings += halvings as u64;
         if s.film.max_speed > 0.0 {
             for v in p.v.iter_mut() {

@@ -26,10 +26,7 @@
 //! other particles first, in their previous order.
 
 use super::{FilmError, FilmParams, FilmState, FilmStepInfo};
-use crate::area::{
-    filament_areas, filament_length, filament_radius, sheet_half_thickness, surface_tension_area,
-    voronoi_area,
-};
+use crate::coupling::surface::{particle_terms, SurfaceParams};
 use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_drag};
 use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
 use crate::math::{Mat3, Real, Vec3};
@@ -37,10 +34,7 @@ use crate::mls::operators::{fit_particle, par_frames, Neighborhoods};
 use crate::mls::{Frame, JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
 use crate::reseed::{reseed_guarded, LocalShape};
-use crate::tension::{
-    bud_force, filament_role, rim_force, sawtooth, solve as solve_tension, FilamentRole,
-    TensionSystem,
-};
+use crate::tension::{solve as solve_tension, TensionSystem};
 use crate::transition::update_codims;
 use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
@@ -331,98 +325,23 @@ pub fn step(
     };
     let n = film.len();
     let n_sheet = nb.n_sheet;
-    let rho = prm.density;
-    // one-face Voronoi areas of sheet particles (sheet neighbours only)
-    let voronoi: Vec<Real> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            if i >= n_sheet {
-                return 0.0;
-            }
-            let nbrs = nb
-                .lists
-                .of(i)
-                .iter()
-                .filter(|&&q| (q as usize) < n_sheet)
-                .map(|&q| film.x[q as usize]);
-            voronoi_area(&film.x[i], &frames[i].axes, nbrs, h)
-        })
-        .collect();
-    let lengths: Vec<Real> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            if i < n_sheet {
-                return 0.0;
-            }
-            let nbrs = nb
-                .lists
-                .of(i)
-                .iter()
-                .filter(|&&q| q as usize >= n_sheet)
-                .map(|&q| film.x[q as usize]);
-            filament_length(&film.x[i], nbrs, 0.5 * h)
-        })
-        .collect();
-    let roles: Vec<FilamentRole> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            filament_role(
-                i,
-                &frames[i].axes,
-                &film.x,
-                &film.codim,
-                nb.lists.of(i),
-                h,
-                prm.bud_angle,
-            )
-        })
-        .collect();
-    let mut area = vec![0.0; n];
-    let mut f = vec![Vec3::zeros(); n];
-    for i in 0..n {
-        if i < n_sheet {
-            if voronoi[i] > 0.0 {
-                film.radius[i] = sheet_half_thickness(film.mass[i], voronoi[i], rho);
-            }
-            area[i] = surface_tension_area(voronoi[i], prm.free_film);
-        } else {
-            let l = lengths[i];
-            let r = filament_radius(film.mass[i], l, rho);
+    // areas, radii and rim/bud forces: the code the coupled step uses
+    // (`coupling::surface::particle_terms`); every film sheet is free (two
+    // faces) when `free_film`
+    let sp = SurfaceParams {
+        mls: geom_mls,
+        sigma: prm.sigma,
+        density: prm.density,
+        bud_angle: prm.bud_angle,
+        rim_modulation: prm.rim_modulation,
+    };
+    let terms = particle_terms(&nb, &frames, |i| film.mass[i], |_| prm.free_film, &sp);
+    let voronoi: Vec<Real> = terms.iter().map(|t| t.voronoi).collect();
+    let area: Vec<Real> = terms.iter().map(|t| t.area).collect();
+    let mut f: Vec<Vec3> = terms.iter().map(|t| t.force).collect();
+    for (i, t) in terms.iter().enumerate() {
+        if let Some(r) = t.radius {
             film.radius[i] = r;
-            let a = filament_areas(r, l);
-            match roles[i] {
-                FilamentRole::Rim => {
-                    area[i] = a.rim_filament;
-                    let m = prm
-                        .rim_modulation
-                        .map_or(1.0, |(k, amp, c)| sawtooth(&film.x[i], &c, k, amp));
-                    f[i] += rim_force(
-                        i,
-                        &frames[i].axes,
-                        &film.x,
-                        &film.codim,
-                        nb.lists.of(i),
-                        prm.sigma,
-                        a.rim,
-                        r,
-                        m,
-                    );
-                }
-                FilamentRole::Bud => {
-                    area[i] = a.lateral;
-                    f[i] += bud_force(
-                        i,
-                        &frames[i].axes,
-                        &film.x,
-                        &film.codim,
-                        nb.lists.of(i),
-                        prm.sigma,
-                        a.bud,
-                        r,
-                    );
-                }
-                _ => area[i] = a.lateral,
-            }
         }
         f[i] += prm.gravity * film.mass[i] - film.v[i] * (prm.damping * film.mass[i]);
     }

@@ -10,6 +10,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use codimfx::film::catenoid::CatenoidSetup;
 use codimfx::film::deformation::latitude_sphere;
+use codimfx::film::driver::substep;
 use codimfx::film::step::{film_speed, step_with_retry};
 use codimfx::film::{FilmParams, FilmState, FilmTimings};
 use codimfx::gas::GasPocket;
@@ -129,27 +130,12 @@ pub fn run(a: FilmsArgs) -> Result<()> {
             // the substepping of `film::driver::advance`
             let mut left = frame;
             while left > 1e-12 * frame {
-                let vmax = film_speed(&p);
-                let mut dt = max_dt;
-                if vmax > 0.0 {
-                    dt = dt.min(a.cfl * spacing / vmax);
-                }
-                if dt >= left {
-                    dt = left;
-                } else if dt > 0.5 * left {
-                    dt = 0.5 * left;
-                }
+                let (dt, _) = substep(max_dt, a.cfl, spacing, film_speed(&p), left);
                 let (info, _) = step_with_retry(&mut p, &mut st, &prm, dt, 2)
                     .with_context(|| format!("{sc} frame {} substep {}", f + 1, substeps + 1))?;
                 left -= dt;
                 substeps += 1;
-                let t = info.timings;
-                sum.advect += t.advect;
-                sum.transition += t.transition;
-                sum.reseed += t.reseed;
-                sum.forces += t.forces;
-                sum.operators += t.operators;
-                sum.tension += t.tension;
+                sum.add(&info.timings);
                 its += info
                     .tension_solve
                     .iter()
