@@ -224,6 +224,56 @@ pub fn particle_terms(
         .collect()
 }
 
+/// Drops (zeroes) the tension rows whose weights or curvature the sampling
+/// cannot resolve: Σ_j |L_ij| h² above [`MAX_ROW_WEIGHT_H2`] or a normal
+/// curvature above [`MAX_CURVATURE_H`]/h. A fit through a degenerate
+/// neighbourhood (the first two rings of a jet's sheet layer, a thin ribbon)
+/// can be full rank and still give such a row; it would make the tension
+/// explode and the system unsolvable. Its particle gets no tension this
+/// step. Returns the number of rows dropped.
+pub fn clamp_rows(
+    matrix: &mut SparseRowMat<usize, Real>,
+    nb: &Neighborhoods,
+    axes: &[crate::math::Mat3],
+    h: Real,
+) -> usize {
+    let n = nb.len();
+    let n_sheet = nb.n_sheet;
+    let kmax = MAX_CURVATURE_H / h;
+    let (rp, bad): (Vec<usize>, Vec<bool>) = {
+        let m = matrix.as_ref();
+        let rp = m.symbolic().row_ptr().to_vec();
+        let ci = m.symbolic().col_idx();
+        let v = m.val();
+        let bad = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let mut lx = Vec3::zeros();
+                for k in rp[i]..rp[i + 1] {
+                    lx += nb.x[ci[k]] * v[k];
+                }
+                let t: Vec3 = axes[i].column(if i < n_sheet { 2 } else { 0 }).into();
+                let kn = if i < n_sheet {
+                    t.dot(&lx).abs()
+                } else {
+                    (lx - t * t.dot(&lx)).norm()
+                };
+                let weight: Real =
+                    v[rp[i]..rp[i + 1]].iter().map(|w| w.abs()).sum::<Real>() * h * h;
+                !(kn <= kmax && weight <= MAX_ROW_WEIGHT_H2)
+            })
+            .collect();
+        (rp, bad)
+    };
+    let vals = matrix.val_mut();
+    for i in (0..n).filter(|&i| bad[i]) {
+        for v in &mut vals[rp[i]..rp[i + 1]] {
+            *v = 0.0;
+        }
+    }
+    bad.iter().filter(|b| **b).count()
+}
+
 /// Builds the particle side from the store (velocities after the body force).
 pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError> {
     let h = prm.mls.h;
@@ -271,44 +321,8 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
         }
     }
     let mut lap = JointLaplacian::assemble(&nb, &geom)?;
-    // a fit through a degenerate neighbourhood (the first two rings of a
-    // jet's sheet layer, a thin ribbon) can be full rank and still give
-    // weights and a curvature far above what the sampling resolves; such a
-    // row would make the tension explode and the coupled system unsolvable.
-    // Its particle gets no tension this step (counted).
-    let kmax = MAX_CURVATURE_H / h;
     let axes: Vec<crate::math::Mat3> = frames.iter().map(|f| f.axes).collect();
-    let (rp, bad): (Vec<usize>, Vec<bool>) = {
-        let m = lap.matrix.as_ref();
-        let rp = m.symbolic().row_ptr().to_vec();
-        let ci = m.symbolic().col_idx();
-        let v = m.val();
-        let bad = (0..n)
-            .map(|i| {
-                let mut lx = Vec3::zeros();
-                for k in rp[i]..rp[i + 1] {
-                    lx += nb.x[ci[k]] * v[k];
-                }
-                let t: Vec3 = axes[i].column(if i < n_sheet { 2 } else { 0 }).into();
-                let kn = if i < n_sheet {
-                    t.dot(&lx).abs()
-                } else {
-                    (lx - t * t.dot(&lx)).norm()
-                };
-                let weight: Real =
-                    v[rp[i]..rp[i + 1]].iter().map(|w| w.abs()).sum::<Real>() * h * h;
-                !(kn <= kmax && weight <= MAX_ROW_WEIGHT_H2)
-            })
-            .collect();
-        (rp, bad)
-    };
-    let vals = lap.matrix.val_mut();
-    for i in (0..n).filter(|&i| bad[i]) {
-        for v in &mut vals[rp[i]..rp[i + 1]] {
-            *v = 0.0;
-        }
-    }
-    counts.curvature_clamps = bad.iter().filter(|b| **b).count();
+    counts.curvature_clamps = clamp_rows(&mut lap.matrix, &nb, &axes, h);
     Ok(Surface {
         mass: nb.store.iter().map(|&s| parts.mass[s]).collect(),
         u: nb.store.iter().map(|&s| parts.v[s]).collect(),
