@@ -27,7 +27,14 @@ impl Hasher for CellHasher {
     }
     #[inline]
     fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
+        // a cell key [i32; 3] arrives here as one 12-byte slice (integer
+        // slices hash their bytes at once): mix it 4 bytes at a time, not
+        // byte by byte (the per-byte loop was ~5 % of a film step's profile)
+        let mut chunks = bytes.chunks_exact(4);
+        for c in &mut chunks {
+            self.write_u64(u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as u64);
+        }
+        for &b in chunks.remainder() {
             self.write_u64(b as u64);
         }
     }

@@ -9,6 +9,17 @@
 //! line, the inner 3 cells, both neighbours filled, lifted onto the fitted
 //! curve (ξ², ξ³) = f(ξ¹).
 //!
+//! **Gap lines (addition to §9).** A sheet stretched along one tangent
+//! direction only (the neck of a catenoid whose rings separate: rows pulled
+//! apart axially while the circumference shrinks) opens whole empty lines of
+//! cells; no empty cell then has all eight neighbours filled and the paper's
+//! rule never inserts, until the rows are too far apart for a cubic fit
+//! (three distinct levels across h) and the tension solve blows up. With
+//! `gap_lines` (on for scenes with moving rings) an empty cell whose three cells on both sides across one grid
+//! axis are filled is filled too, halfway between the particles of the two
+//! cells across the gap. A free edge or a hole wider than a cell has one side
+//! empty and stays open.
+//!
 //! Candidates from different particles that describe the same hole are
 //! merged (a candidate closer than `merge_distance·h` to an earlier accepted
 //! one, in particle order, is dropped), so holes are filled once.
@@ -50,6 +61,13 @@ pub struct ReseedParams {
     pub merge_distance: Real,
     /// Maximum number of donors per new particle.
     pub donors: usize,
+    /// Also fill an empty cell lying in a gap line (its three cells on both
+    /// sides across one grid axis filled), not only a cell with all eight
+    /// neighbours filled: a film stretched in one direction only opens whole
+    /// empty lines of cells that the paper's rule never fills. Off in
+    /// [`ReseedParams::paper`]; on for scenes whose rings move (see
+    /// `docs/decisions.md`, "Moving rings").
+    pub gap_lines: bool,
     /// A sheet particle closer than this (relative to h) to a filament
     /// particle is absorbed by it (rim collection); 0 disables it.
     pub absorb_distance: Real,
@@ -67,6 +85,7 @@ impl ReseedParams {
             remove_distance: 0.15,
             merge_distance: 0.25,
             donors: 4,
+            gap_lines: false,
             absorb_distance: 0.3,
             light_fraction: 0.2,
         }
@@ -88,6 +107,10 @@ pub struct ReseedCounts {
     pub absorbed: u64,
     /// Light particles merged into a neighbour.
     pub light_merged: u64,
+    /// Filament particles that reached a boundary (ring) particle and were
+    /// merged into it (the rim of a retracted film wets the ring).
+    #[serde(default)]
+    pub boundary_absorbed: u64,
     /// Filament particles left out of filament insertion because their
     /// neighbourhood is not line-like (a clump) or their frame is not a
     /// filament frame (a counted guard, see [`reseed_guarded`]).
@@ -96,15 +119,16 @@ pub struct ReseedCounts {
 }
 
 impl ReseedCounts {
-    /// Adds another pass's counts.
-    pub fn add(&mut self, b: &ReseedCounts) {
-        self.sheet_inserted += b.sheet_inserted;
-        self.sheet_removed += b.sheet_removed;
-        self.filament_inserted += b.filament_inserted;
-        self.filament_removed += b.filament_removed;
-        self.absorbed += b.absorbed;
-        self.light_merged += b.light_merged;
-        self.filament_skipped += b.filament_skipped;
+    /// Adds the counts of `o`.
+    pub fn add(&mut self, o: &ReseedCounts) {
+        self.sheet_inserted += o.sheet_inserted;
+        self.sheet_removed += o.sheet_removed;
+        self.filament_inserted += o.filament_inserted;
+        self.filament_removed += o.filament_removed;
+        self.absorbed += o.absorbed;
+        self.light_merged += o.light_merged;
+        self.boundary_absorbed += o.boundary_absorbed;
+        self.filament_skipped += o.filament_skipped;
     }
 }
 
@@ -142,6 +166,9 @@ fn sheet_candidates(
     let c = prm.cell * prm.h;
     let mut filled = [[false; 5]; 5];
     filled[2][2] = true; // p itself
+                         // sum of the cell coordinates of the particles in each cell (and count)
+    let mut mean = [[(0.0, 0.0, 0.0); 5]; 5];
+    mean[2][2] = (0.0, 0.0, 1.0);
     let b1: Vec3 = frame.column(0).into();
     let b2: Vec3 = frame.column(1).into();
     for &q in nbrs {
@@ -153,6 +180,10 @@ fn sheet_candidates(
         let (u, v) = (d.dot(&b1) / c + 2.5, d.dot(&b2) / c + 2.5);
         if (0.0..5.0).contains(&u) && (0.0..5.0).contains(&v) {
             filled[u as usize][v as usize] = true;
+            let m = &mut mean[u as usize][v as usize];
+            m.0 += u - 2.5;
+            m.1 += v - 2.5;
+            m.2 += 1.0;
         }
         if parts.fixed[q] {
             // a boundary (ring) particle closes the film: the cells beyond it,
@@ -180,8 +211,44 @@ fn sheet_candidates(
                         || filled[(i as i32 + di) as usize][(j as i32 + dj) as usize]
                 })
             });
-            if surrounded {
-                let (u, v) = ((i as Real - 2.0) * c, (j as Real - 2.0) * c);
+            // a gap line: the film stretched along one tangent direction only
+            // (the neck of a catenoid whose rings separate) leaves whole lines of
+            // cells empty, so no empty cell has all eight neighbours filled; a
+            // cell whose three cells on *both* sides across one grid axis are
+            // filled lies in such a gap and is filled too (a free edge or a
+            // hole larger than one cell has one side empty and is left alone)
+            let side = |a: (i32, i32), b: (i32, i32)| {
+                (-1i32..=1).all(|k| {
+                    let (ia, ja) = (i as i32 + a.0 + k * b.0, j as i32 + a.1 + k * b.1);
+                    filled[ia as usize][ja as usize]
+                })
+            };
+            let across_u = side((-1, 0), (0, 1)) && side((1, 0), (0, 1));
+            let across_v = side((0, -1), (1, 0)) && side((0, 1), (1, 0));
+            let gap_line = prm.gap_lines && (across_u || across_v);
+            if surrounded || gap_line {
+                let (mut u, mut v) = ((i as Real - 2.0) * c, (j as Real - 2.0) * c);
+                if !surrounded {
+                    // in a gap line the new particle goes halfway between the
+                    // particles of the two cells across the gap (the cell
+                    // centre can lie next to one side when the gap is < 2 cells)
+                    let (a, b) = if across_u {
+                        (mean[i - 1][j], mean[i + 1][j])
+                    } else {
+                        (mean[i][j - 1], mean[i][j + 1])
+                    };
+                    if a.2 > 0.0 && b.2 > 0.0 {
+                        let mid = |k: usize| {
+                            let (pa, pb) = if k == 0 { (a.0, b.0) } else { (a.1, b.1) };
+                            0.5 * (pa / a.2 + pb / b.2) * c
+                        };
+                        if across_u {
+                            u = mid(0);
+                        } else {
+                            v = mid(1);
+                        }
+                    }
+                }
                 let w = shape.height(p, u, v);
                 let b3: Vec3 = frame.column(2).into();
                 out.push(parts.x[p] + b1 * u + b2 * v + b3 * w);
@@ -301,6 +368,12 @@ fn insert(parts: &mut Particles, kind: Codim, cands: Vec<Vec3>, prm: &ReseedPara
 fn merge_into(parts: &mut Particles, keep: usize, gone: usize) {
     let (mk, mg) = (parts.mass[keep], parts.mass[gone]);
     let m = mk + mg;
+    if parts.fixed[keep] {
+        // a boundary (ring) particle takes the mass but keeps its prescribed
+        // velocity: momentum goes to the boundary, as on a wall
+        parts.mass[keep] = m;
+        return;
+    }
     if m > 0.0 {
         parts.v[keep] = (parts.v[keep] * mk + parts.v[gone] * mg) / m;
         parts.radius[keep] = (parts.radius[keep] * mk + parts.radius[gone] * mg) / m;
@@ -366,12 +439,10 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
     }
     let pts: Vec<Vec3> = idx.iter().map(|&i| parts.x[i]).collect();
     let grid = CellGrid::build(&pts, prm.h);
-    let mut alive = vec![true; parts.len()];
-    let mut n = 0;
-    for (a, &p) in idx.iter().enumerate() {
-        if parts.fixed[p] || !alive[p] {
-            continue;
-        }
+    // The light test of `p` given the current masses and survivors: the
+    // nearest alive non-fixed neighbour when p is light.
+    let test = |a: usize, parts: &Particles, alive: &[bool]| -> Option<usize> {
+        let p = idx[a];
         let (mut sum, mut cnt) = (0.0, 0usize);
         let mut best: Option<(Real, usize)> = None;
         grid.for_each_within(&pts, &pts[a], prm.h, |b, d2| {
@@ -379,16 +450,47 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
             if q != p && alive[q] {
                 sum += parts.mass[q];
                 cnt += 1;
-                if best.is_none_or(|(bd, bq)| d2 < bd || (d2 == bd && q < bq)) {
+                if !parts.fixed[q] && best.is_none_or(|(bd, bq)| d2 < bd || (d2 == bd && q < bq)) {
                     best = Some((d2, q));
                 }
             }
         });
-        let Some((_, q)) = best else { continue };
-        if parts.mass[p] < prm.light_fraction * sum / cnt as Real {
+        let (_, q) = best?;
+        (parts.mass[p] < prm.light_fraction * sum / cnt as Real).then_some(q)
+    };
+    // The sequential pass below visits the particles in order and merges
+    // each light one at once, which changes its neighbours' tests. The tests
+    // of all particles against the initial state run in parallel first; in
+    // the pass a particle is re-tested only when it was light initially or a
+    // merge happened within h of it (its test inputs changed), so the result
+    // is the one of testing every particle in turn, at a fraction of the cost.
+    let all_alive = vec![true; parts.len()];
+    let view: &Particles = parts;
+    let light0: Vec<bool> = (0..idx.len())
+        .into_par_iter()
+        .map(|a| !view.fixed[idx[a]] && test(a, view, &all_alive).is_some())
+        .collect();
+    let pos: Vec<usize> = {
+        let mut v = vec![usize::MAX; parts.len()];
+        for (a, &i) in idx.iter().enumerate() {
+            v[i] = a;
+        }
+        v
+    };
+    let mut dirty = light0;
+    let mut alive = vec![true; parts.len()];
+    let mut n = 0;
+    for (a, &p) in idx.iter().enumerate() {
+        if parts.fixed[p] || !alive[p] || !dirty[a] {
+            continue;
+        }
+        if let Some(q) = test(a, parts, &alive) {
             merge_into(parts, q, p);
             alive[p] = false;
             n += 1;
+            for c in [a, pos[q]] {
+                grid.for_each_within(&pts, &pts[c], prm.h, |b, _| dirty[b] = true);
+            }
         }
     }
     parts.retain(&alive);
@@ -402,41 +504,70 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
 /// it a light rim particle, pulled by the rim tension 2σl, overtakes the
 /// sheet instead of collecting it.
 fn absorb_into_rims(parts: &mut Particles, prm: &ReseedParams) -> u64 {
-    let r = prm.absorb_distance * prm.h;
-    if r <= 0.0 {
+    absorb_nearest(
+        parts,
+        prm.absorb_distance * prm.h,
+        |p, i| p.codim[i] == Codim::Filament,
+        |p, i| p.codim[i] == Codim::Sheet && !p.fixed[i],
+    )
+}
+
+/// Merges every particle with `absorbed(i)` into the nearest particle with
+/// `target(j)` closer than `r` (mass and momentum added; the target keeps its
+/// position and radius, a fixed target its velocity). Returns the count.
+fn absorb_nearest(
+    parts: &mut Particles,
+    r: Real,
+    target: impl Fn(&Particles, usize) -> bool,
+    absorbed: impl Fn(&Particles, usize) -> bool,
+) -> u64 {
+    let tg: Vec<usize> = (0..parts.len()).filter(|&i| target(parts, i)).collect();
+    if r <= 0.0 || tg.is_empty() {
         return 0;
     }
-    let fil: Vec<usize> = (0..parts.len())
-        .filter(|&i| parts.codim[i] == Codim::Filament)
-        .collect();
-    if fil.is_empty() {
-        return 0;
-    }
-    let fx: Vec<Vec3> = fil.iter().map(|&i| parts.x[i]).collect();
-    let grid = CellGrid::build(&fx, r);
+    let tx: Vec<Vec3> = tg.iter().map(|&i| parts.x[i]).collect();
+    let grid = CellGrid::build(&tx, r);
     let mut alive = vec![true; parts.len()];
     let mut n = 0;
     for i in 0..parts.len() {
-        if parts.codim[i] != Codim::Sheet || parts.fixed[i] {
+        if !absorbed(parts, i) {
             continue;
         }
         let mut best: Option<(Real, usize)> = None;
-        grid.for_each_within(&fx, &parts.x[i], r, |b, d2| {
+        grid.for_each_within(&tx, &parts.x[i], r, |b, d2| {
             if best.is_none_or(|(bd, bb)| d2 < bd || (d2 == bd && b < bb)) {
                 best = Some((d2, b));
             }
         });
         if let Some((_, b)) = best {
-            let q = fil[b];
-            let r = parts.radius[q];
+            let q = tg[b];
+            let rq = parts.radius[q];
             merge_into(parts, q, i);
-            parts.radius[q] = r; // the rim keeps its tube radius; it is recomputed from mass
+            parts.radius[q] = rq; // a rim keeps its tube radius; it is recomputed from mass
             alive[i] = false;
             n += 1;
         }
     }
     parts.retain(&alive);
     n
+}
+
+/// Rim arrival at a boundary: every non-fixed filament particle closer than
+/// `absorb_distance·h` to a fixed (ring) particle is merged into the nearest
+/// one (mass added; the ring keeps its prescribed velocity, see
+/// `merge_into`). After a catenoid pinches, the two half-films retract to
+/// their rings as free rims; without this the rim particles piled up against
+/// the ring, where no line-like filament fit exists, and filament reseeding
+/// and the rim force fed on each other (speeds of 10³–10⁴ m/s within five
+/// frames, coarse probe). Sheet particles next to a ring are the film's
+/// attachment and are left alone.
+fn absorb_into_boundary(parts: &mut Particles, prm: &ReseedParams) -> u64 {
+    absorb_nearest(
+        parts,
+        prm.absorb_distance * prm.h,
+        |p, i| p.fixed[i],
+        |p, i| p.codim[i] == Codim::Filament && !p.fixed[i],
+    )
 }
 
 /// Reseeds sheets and filaments (Algorithm 1, line 3). `frames[i]` and
@@ -503,6 +634,7 @@ pub fn reseed_guarded<'a>(
         ..Default::default()
     };
     c.absorbed = absorb_into_rims(parts, prm);
+    c.boundary_absorbed = absorb_into_boundary(parts, prm);
     c.light_merged =
         merge_light(parts, Codim::Sheet, prm) + merge_light(parts, Codim::Filament, prm);
     c.sheet_removed = remove_close(parts, Codim::Sheet, prm);
@@ -511,172 +643,5 @@ pub fn reseed_guarded<'a>(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::neighbors::neighbor_lists;
-
-    fn flat_sheet(n: usize, s: Real, hole: Option<(usize, usize)>) -> Particles {
-        let mut p = Particles::new();
-        for i in 0..n {
-            for j in 0..n {
-                if Some((i, j)) == hole {
-                    continue;
-                }
-                let v = Vec3::new(0.1 * i as Real, -0.2 * j as Real, 0.05);
-                p.push(
-                    Vec3::new(i as Real * s, j as Real * s, 0.0),
-                    v,
-                    1.0 + 0.01 * (i + j) as Real,
-                    0.01,
-                    Codim::Sheet,
-                );
-            }
-        }
-        p
-    }
-
-    fn momentum(p: &Particles) -> Vec3 {
-        (0..p.len()).map(|i| p.v[i] * p.mass[i]).sum()
-    }
-
-    #[test]
-    fn hole_in_sheet_is_filled_once_conserving_mass_and_momentum() {
-        let h = 0.1;
-        let s = 0.4 * h; // one particle per tangent cell
-        let mut p = flat_sheet(11, s, Some((5, 5)));
-        let (m0, j0) = (p.total_mass(), momentum(&p));
-        let frames = vec![Mat3::identity(); p.len()];
-        let nl = neighbor_lists(&p.x, h);
-        let c = reseed(
-            &mut p,
-            &frames,
-            |i| nl.of(i),
-            &FlatShape,
-            &ReseedParams::paper(h),
-        );
-        assert_eq!(c.sheet_inserted, 1, "{c:?}");
-        assert_eq!(c.sheet_removed, 0);
-        let new = p.len() - 1;
-        assert!((p.x[new] - Vec3::new(5.0 * s, 5.0 * s, 0.0)).norm() < 1e-12);
-        assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
-        assert!((momentum(&p) - j0).norm() < 1e-12 * j0.norm());
-    }
-
-    #[test]
-    fn new_particle_lies_on_the_fitted_surface() {
-        struct Bowl;
-        impl LocalShape for Bowl {
-            fn height(&self, _: usize, u: Real, v: Real) -> Real {
-                u * u + v * v
-            }
-            fn curve(&self, _: usize, _: Real) -> (Real, Real) {
-                (0.0, 0.0)
-            }
-        }
-        let h = 0.1;
-        let mut p = flat_sheet(11, 0.4 * h, Some((5, 5)));
-        let frames = vec![Mat3::identity(); p.len()];
-        let nl = neighbor_lists(&p.x, h);
-        reseed(
-            &mut p,
-            &frames,
-            |i| nl.of(i),
-            &Bowl,
-            &ReseedParams::paper(h),
-        );
-        let new = *p.id.last().unwrap();
-        let k = p.id.iter().position(|&i| i == new).unwrap();
-        // seeded by some neighbour q: z = |x_new - x_q|² in q's frame
-        let z = p.x[k].z;
-        assert!(z > 0.0 && z <= 2.0 * (0.4 * h).powi(2) + 1e-12, "z = {z}");
-    }
-
-    #[test]
-    fn close_pairs_are_merged_conserving_mass_and_momentum() {
-        let h = 0.1;
-        let mut p = flat_sheet(6, 0.4 * h, None);
-        p.push(
-            Vec3::new(0.401 * h, 0.0, 0.0),
-            Vec3::new(3.0, 0.0, 0.0),
-            2.0,
-            0.01,
-            Codim::Sheet,
-        );
-        let (m0, j0, n0) = (p.total_mass(), momentum(&p), p.len());
-        let frames = vec![Mat3::identity(); p.len()];
-        let nl = neighbor_lists(&p.x, h);
-        let c = reseed(
-            &mut p,
-            &frames,
-            |i| nl.of(i),
-            &FlatShape,
-            &ReseedParams::paper(h),
-        );
-        assert_eq!(c.sheet_removed, 1);
-        assert_eq!(c.sheet_inserted, 0);
-        assert_eq!(p.len(), n0 - 1);
-        assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
-        assert!((momentum(&p) - j0).norm() < 1e-12 * j0.norm());
-    }
-
-    #[test]
-    fn stretched_filament_gains_a_particle_in_each_gap() {
-        let h = 0.1;
-        let mut p = Particles::new();
-        // spacing 0.4h except one gap of 0.8h between particles 4 and 5
-        let mut xs: Vec<Real> = (0..5).map(|i| i as Real * 0.4 * h).collect();
-        xs.extend((5..10).map(|i| (i as Real + 1.0) * 0.4 * h));
-        for x in xs {
-            p.push(
-                Vec3::new(x, 0.0, 0.0),
-                Vec3::new(0.0, 1.0, 0.0),
-                1.0,
-                0.01,
-                Codim::Filament,
-            );
-        }
-        let m0 = p.total_mass();
-        let frames = vec![Mat3::identity(); p.len()];
-        let nl = neighbor_lists(&p.x, h);
-        let c = reseed(
-            &mut p,
-            &frames,
-            |i| nl.of(i),
-            &FlatShape,
-            &ReseedParams::paper(h),
-        );
-        assert_eq!(c.filament_inserted, 1, "{c:?}");
-        assert!(p
-            .x
-            .iter()
-            .any(|x| (x - Vec3::new(2.0 * h, 0.0, 0.0)).norm() < 1e-12));
-        assert!((p.total_mass() - m0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn fixed_particles_are_never_removed() {
-        let h = 0.1;
-        let mut p = Particles::new();
-        p.push(Vec3::zeros(), Vec3::zeros(), 1.0, 0.01, Codim::Sheet);
-        p.push(
-            Vec3::new(0.001, 0.0, 0.0),
-            Vec3::zeros(),
-            1.0,
-            0.01,
-            Codim::Sheet,
-        );
-        p.fixed[1] = true;
-        p.fixed[0] = true;
-        let frames = vec![Mat3::identity(); 2];
-        let nl = neighbor_lists(&p.x, h);
-        let c = reseed(
-            &mut p,
-            &frames,
-            |i| nl.of(i),
-            &FlatShape,
-            &ReseedParams::paper(h),
-        );
-        assert_eq!(c.sheet_removed, 0);
-        assert_eq!(p.len(), 2);
-    }
-}
+#[path = "reseed_tests.rs"]
+mod tests;

@@ -164,6 +164,10 @@ pub struct TensionSystem<'a> {
     pub f_explicit: &'a [Vec3],
     /// Fixed particles keep `u`.
     pub fixed: &'a [bool],
+    /// Implicit drag coefficients d (kg/s) per particle, or empty for none:
+    /// the force −d u^{n+1} joins the system's diagonal (its target velocity
+    /// goes into `f_explicit` as d u_target, see `gas::wind_drag`).
+    pub drag: &'a [Real],
     /// Surface tension σ (N/m).
     pub sigma: Real,
     /// Time step Δt (s).
@@ -179,9 +183,10 @@ pub struct TensionSolution {
     pub info: [SolveInfo; 3],
 }
 
-/// Assembles A = I − σΔt² M⁻¹ S L: eq. (16) with every row divided by the
-/// particle's mass, so rows of light and heavy particles are on one scale
-/// (identity rows for fixed particles).
+/// Assembles A = I + Δt M⁻¹ D − σΔt² M⁻¹ S L: eq. (16) with every row
+/// divided by the particle's mass, so rows of light and heavy particles are
+/// on one scale (identity rows for fixed particles); D is the implicit drag
+/// (zero unless `drag` is given).
 pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveError> {
     let l = Csr::from_faer(sys.laplacian)?;
     let n = l.nrows;
@@ -192,7 +197,8 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
             t.push(Triplet::new(i, i, 1.0));
             continue;
         }
-        t.push(Triplet::new(i, i, 1.0));
+        let d = sys.drag.get(i).map_or(0.0, |d| sys.dt * d / sys.mass[i]);
+        t.push(Triplet::new(i, i, 1.0 + d));
         let ci = c * sys.area[i] / sys.mass[i];
         for k in l.row_ptr[i]..l.row_ptr[i + 1] {
             t.push(Triplet::new(i, l.col[k], -ci * l.val[k]));
@@ -286,6 +292,7 @@ mod tests {
             u: &u_fixed,
             f_explicit: &f,
             fixed: &fixed,
+            drag: &[],
             sigma,
             dt,
         };
@@ -323,6 +330,7 @@ mod tests {
             u: &u,
             f_explicit: &f,
             fixed: &fixed,
+            drag: &[],
             sigma: 3.0,
             dt: 0.05,
         };

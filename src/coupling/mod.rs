@@ -220,6 +220,7 @@ pub fn solve(
                 u: &surf.u,
                 f_explicit: &surf.force,
                 fixed: &surf.fixed,
+                drag: &[],
                 sigma: prm.surface.sigma,
                 dt,
             };

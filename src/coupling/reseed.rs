@@ -18,7 +18,7 @@
 use super::codim::Source;
 use crate::film::step::FittedShape;
 use crate::math::{Mat3, Real, Vec3};
-use crate::mls::operators::{par_fit_map, par_frames, Neighborhoods};
+use crate::mls::operators::{par_frames, Neighborhoods};
 use crate::mls::{MlsError, MlsParams};
 use crate::particles::{Codim, Particles};
 use crate::reseed::{reseed_guarded, ReseedCounts, ReseedParams};
@@ -47,8 +47,11 @@ pub fn reseed_surface(
     };
     let frames = par_frames(&nb, &geom);
     let axes: Vec<Mat3> = frames.iter().map(|f| f.axes).collect();
-    let (geo, _) = par_fit_map(&nb, &frames, &geom, |_, f| f.map(|f| (f.slope, f.second)));
-    let shape = FittedShape { h, geo };
+    let shape = FittedShape {
+        nb: &nb,
+        frames: &frames,
+        mls: &geom,
+    };
     // the joint set as its own store; source particles held
     let mut film = Particles {
         next_id: parts.next_id,
@@ -83,6 +86,7 @@ pub fn reseed_surface(
         + counts.filament_removed
         + counts.absorbed
         + counts.light_merged
+        + counts.boundary_absorbed
         > 0;
     if !changed {
         return Ok(counts);

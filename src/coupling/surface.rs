@@ -16,7 +16,7 @@ use crate::area::{
 };
 use crate::math::{Real, Vec3};
 use crate::mls::operators::{par_frames, Neighborhoods};
-use crate::mls::{FitStats, JointLaplacian, MlsError, MlsParams};
+use crate::mls::{FitStats, Frame, JointLaplacian, MlsError, MlsParams};
 use crate::neighbors::neighbor_lists_between;
 use crate::particles::{Codim, Particles};
 use crate::tension::{bud_force, filament_role, rim_force, sawtooth, FilamentRole};
@@ -137,37 +137,42 @@ impl Surface {
     }
 }
 
-/// Builds the particle side from the store (velocities after the body force).
-pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError> {
+/// Control area, explicit tension force and radius of one joint particle
+/// (Appendix D, §6): what the coupled step and the film step share.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParticleTerms {
+    /// One-face Voronoi area of a sheet particle (sheet neighbours only), 0
+    /// for filaments (m²).
+    pub voronoi: Real,
+    /// Surface-tension area S (m²): the Voronoi area (doubled for a free
+    /// film's two faces), S_f of a rim, the lateral area of other filaments.
+    pub area: Real,
+    /// Explicit rim or bud tension (N).
+    pub force: Vec3,
+    /// New radius: half thickness of a free sheet, tube radius of a filament;
+    /// `None` keeps the stored one.
+    pub radius: Option<Real>,
+    /// 0 sheet on a liquid body, 1 free sheet, 2 rim, 3 bud, 4 other filament.
+    pub class: u8,
+}
+
+/// Areas, rim/bud forces and radii of every joint particle of `nb`, with its
+/// frames; `mass(i)` is joint particle i's mass, `free(i)` says whether sheet
+/// particle i is a free film (two faces) rather than a liquid body's surface.
+pub fn particle_terms(
+    nb: &Neighborhoods,
+    frames: &[Frame],
+    mass: impl Fn(usize) -> Real + Sync,
+    free: impl Fn(usize) -> bool + Sync,
+    prm: &SurfaceParams,
+) -> Vec<ParticleTerms> {
     let h = prm.mls.h;
-    let geom = MlsParams {
-        sheet_weight_in_filament: 0.0,
-        ..prm.mls
-    };
-    let nb = Neighborhoods::build(&parts.x, &parts.codim, h)?;
-    let n = nb.len();
     let n_sheet = nb.n_sheet;
-    let codim: Vec<Codim> = (0..n).map(|i| nb.codim(i)).collect();
-    let frames = par_frames(&nb, &geom);
-    // volume neighbours decide between one face (liquid surface) and two (film)
-    let volume_x: Vec<Vec3> = parts
-        .x
-        .iter()
-        .zip(&parts.codim)
-        .filter(|(_, c)| **c == Codim::Volume)
-        .map(|(x, _)| *x)
-        .collect();
-    let on_volume: Vec<bool> = if volume_x.is_empty() {
-        vec![false; n_sheet]
-    } else {
-        let vl = neighbor_lists_between(&nb.x[..n_sheet], &volume_x, h);
-        (0..n_sheet).map(|i| !vl.of(i).is_empty()).collect()
-    };
-    let rows: Vec<(Real, Vec3, Option<Real>, u8)> = (0..n)
+    let codim: Vec<Codim> = (0..nb.len()).map(|i| nb.codim(i)).collect();
+    (0..nb.len())
         .into_par_iter()
         .map(|i| {
-            let s = nb.store[i];
-            let m = parts.mass[s];
+            let m = mass(i);
             let rmax = sphere_radius(m, prm.density);
             let nbrs = nb.lists.of(i);
             if i < n_sheet {
@@ -179,15 +184,15 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
                         .map(|&q| nb.x[q as usize]),
                     h,
                 );
-                let free = !on_volume[i];
-                let r = (free && vor > 0.0)
-                    .then(|| sheet_half_thickness(m, vor, prm.density).min(rmax));
-                return (
-                    surface_tension_area(vor, free),
-                    Vec3::zeros(),
-                    r,
-                    free as u8,
-                );
+                let free = free(i);
+                return ParticleTerms {
+                    voronoi: vor,
+                    area: surface_tension_area(vor, free),
+                    force: Vec3::zeros(),
+                    radius: (free && vor > 0.0)
+                        .then(|| sheet_half_thickness(m, vor, prm.density).min(rmax)),
+                    class: free as u8,
+                };
             }
             let l = filament_length(
                 &nb.x[i],
@@ -199,46 +204,55 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
             let r = filament_radius(m, l, prm.density).min(rmax);
             let a = filament_areas(r, l);
             let axes = &frames[i].axes;
-            match filament_role(i, axes, &nb.x, &codim, nbrs, h, prm.bud_angle) {
-                FilamentRole::Rim => {
-                    let md = prm
-                        .rim_modulation
-                        .map_or(1.0, |(k, amp, c)| sawtooth(&nb.x[i], &c, k, amp));
-                    let f = rim_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.rim, r, md);
-                    (a.rim_filament, f, Some(r), 2)
-                }
-                FilamentRole::Bud => {
-                    let f = bud_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.bud, r);
-                    (a.lateral, f, Some(r), 3)
-                }
-                _ => (a.lateral, Vec3::zeros(), Some(r), 4),
+            let (area, force, class) =
+                match filament_role(i, axes, &nb.x, &codim, nbrs, h, prm.bud_angle) {
+                    FilamentRole::Rim => {
+                        let md = prm
+                            .rim_modulation
+                            .map_or(1.0, |(k, amp, c)| sawtooth(&nb.x[i], &c, k, amp));
+                        let f = rim_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.rim, r, md);
+                        (a.rim_filament, f, 2)
+                    }
+                    FilamentRole::Bud => {
+                        let f = bud_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.bud, r);
+                        (a.lateral, f, 3)
+                    }
+                    _ => (a.lateral, Vec3::zeros(), 4),
+                };
+            ParticleTerms {
+                voronoi: 0.0,
+                area,
+                force,
+                radius: Some(r),
+                class,
             }
         })
-        .collect();
-    let mut counts = SurfaceCounts::default();
-    for (i, r) in rows.iter().enumerate() {
-        match r.3 {
-            0 if i < n_sheet => counts.surface_sheets += 1,
-            1 => counts.free_sheets += 1,
-            2 => counts.rims += 1,
-            3 => counts.buds += 1,
-            _ => {}
-        }
-    }
-    let mut lap = JointLaplacian::assemble(&nb, &geom)?;
-    // a fit through a degenerate neighbourhood (the first two rings of a
-    // jet's sheet layer, a thin ribbon) can be full rank and still give
-    // weights and a curvature far above what the sampling resolves; such a
-    // row would make the tension explode and the coupled system unsolvable.
-    // Its particle gets no tension this step (counted).
+        .collect()
+}
+
+/// Drops (zeroes) the tension rows whose weights or curvature the sampling
+/// cannot resolve: Σ_j |L_ij| h² above [`MAX_ROW_WEIGHT_H2`] or a normal
+/// curvature above [`MAX_CURVATURE_H`]/h. A fit through a degenerate
+/// neighbourhood (the first two rings of a jet's sheet layer, a thin ribbon)
+/// can be full rank and still give such a row; it would make the tension
+/// explode and the system unsolvable. Its particle gets no tension this
+/// step. Returns the number of rows dropped.
+pub fn clamp_rows(
+    matrix: &mut SparseRowMat<usize, Real>,
+    nb: &Neighborhoods,
+    axes: &[crate::math::Mat3],
+    h: Real,
+) -> usize {
+    let n = nb.len();
+    let n_sheet = nb.n_sheet;
     let kmax = MAX_CURVATURE_H / h;
-    let axes: Vec<crate::math::Mat3> = frames.iter().map(|f| f.axes).collect();
     let (rp, bad): (Vec<usize>, Vec<bool>) = {
-        let m = lap.matrix.as_ref();
+        let m = matrix.as_ref();
         let rp = m.symbolic().row_ptr().to_vec();
         let ci = m.symbolic().col_idx();
         let v = m.val();
         let bad = (0..n)
+            .into_par_iter()
             .map(|i| {
                 let mut lx = Vec3::zeros();
                 for k in rp[i]..rp[i + 1] {
@@ -257,13 +271,64 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
             .collect();
         (rp, bad)
     };
-    let vals = lap.matrix.val_mut();
+    let vals = matrix.val_mut();
     for i in (0..n).filter(|&i| bad[i]) {
         for v in &mut vals[rp[i]..rp[i + 1]] {
             *v = 0.0;
         }
     }
-    counts.curvature_clamps = bad.iter().filter(|b| **b).count();
+    bad.iter().filter(|b| **b).count()
+}
+
+/// Builds the particle side from the store (velocities after the body force).
+pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError> {
+    let h = prm.mls.h;
+    let geom = MlsParams {
+        sheet_weight_in_filament: 0.0,
+        ..prm.mls
+    };
+    let nb = Neighborhoods::build(&parts.x, &parts.codim, h)?;
+    let n = nb.len();
+    let n_sheet = nb.n_sheet;
+    let frames = par_frames(&nb, &geom);
+    // volume neighbours decide between one face (liquid surface) and two (film)
+    let volume_x: Vec<Vec3> = parts
+        .x
+        .iter()
+        .zip(&parts.codim)
+        .filter(|(_, c)| **c == Codim::Volume)
+        .map(|(x, _)| *x)
+        .collect();
+    let on_volume: Vec<bool> = if volume_x.is_empty() {
+        vec![false; n_sheet]
+    } else {
+        let vl = neighbor_lists_between(&nb.x[..n_sheet], &volume_x, h);
+        (0..n_sheet).map(|i| !vl.of(i).is_empty()).collect()
+    };
+    let terms = particle_terms(
+        &nb,
+        &frames,
+        |i| parts.mass[nb.store[i]],
+        |i| !on_volume[i],
+        prm,
+    );
+    let rows: Vec<(Real, Vec3, Option<Real>, u8)> = terms
+        .iter()
+        .map(|t| (t.area, t.force, t.radius, t.class))
+        .collect();
+    let mut counts = SurfaceCounts::default();
+    for (i, r) in rows.iter().enumerate() {
+        match r.3 {
+            0 if i < n_sheet => counts.surface_sheets += 1,
+            1 => counts.free_sheets += 1,
+            2 => counts.rims += 1,
+            3 => counts.buds += 1,
+            _ => {}
+        }
+    }
+    let mut lap = JointLaplacian::assemble(&nb, &geom)?;
+    let axes: Vec<crate::math::Mat3> = frames.iter().map(|f| f.axes).collect();
+    counts.curvature_clamps = clamp_rows(&mut lap.matrix, &nb, &axes, h);
     counts.radius_clamps = rows
         .iter()
         .zip(&nb.store)

@@ -4,7 +4,7 @@
 //! per-frame record (stage times, solver figures, transition and reseeding
 //! counts). No grid is allocated and the grid stages report 0 s.
 
-use super::step::step_with_retry;
+use super::step::{film_speed, step_with_retry};
 use super::{FilmError, FilmParams, FilmState, Wind};
 use crate::gas::GasPocket;
 use crate::io::manifest::FrameRecord;
@@ -40,6 +40,15 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
     }
     if !f.reseed {
         prm.reseed = None;
+    }
+    // rings pulled apart stretch the film along one direction only: fill the
+    // empty lines of the reseeding grid too (`ReseedParams::gap_lines`)
+    let moving_rings = s
+        .films
+        .iter()
+        .any(|b| matches!(b, FilmBody::Cylinder { ring_speed, .. } if *ring_speed != 0.0));
+    if let Some(r) = prm.reseed.as_mut() {
+        r.gap_lines = moving_rings;
     }
     prm.solver = BicgstabParams {
         tol: f.solver_tolerance,
@@ -103,6 +112,24 @@ pub fn frame_vectors(p: &Particles, h: Real) -> Vec<Vec3> {
     out
 }
 
+/// Length of the next substep with `rem` seconds of the frame left: at
+/// most `max_dt`, motion at most `cfl` × `spacing` at speed `vmax`, and the
+/// rest of the frame split in two rather than leaving a sliver. Returns the
+/// substep and whether it ends the frame.
+pub fn substep(max_dt: Real, cfl: Real, spacing: Real, vmax: Real, rem: Real) -> (Real, bool) {
+    let mut dt = max_dt;
+    if vmax > 0.0 {
+        dt = dt.min(cfl * spacing / vmax);
+    }
+    if dt >= rem {
+        (rem, true)
+    } else if dt > 0.5 * rem {
+        (0.5 * rem, false)
+    } else {
+        (dt, false)
+    }
+}
+
 /// Advances the film from `t` to `t_end`, filling the frame record. Returns
 /// the number of substeps and the step range (min, max).
 pub fn advance(
@@ -118,18 +145,7 @@ pub fn advance(
     let sp = spacing(s);
     let (mut n, mut dmin, mut dmax) = (0u32, Real::INFINITY, 0.0 as Real);
     while t < t_end {
-        let rem = t_end - t;
-        let vmax = p.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
-        let mut dt = s.time.max_dt;
-        if vmax > 0.0 {
-            dt = dt.min(s.film.cfl * sp / vmax);
-        }
-        let last = dt >= rem;
-        if last {
-            dt = rem;
-        } else if dt > 0.5 * rem {
-            dt = 0.5 * rem;
-        }
+        let (dt, last) = substep(s.time.max_dt, s.film.cfl, sp, film_speed(p), t_end - t);
         let (info, halvings) = step_with_retry(p, st, prm, dt, 4)?;
         t = if last { t_end } else { t + dt };
         n += 1;

@@ -135,6 +135,19 @@ pub struct FilmTimings {
     pub tension: f64,
 }
 
+impl FilmTimings {
+    /// Adds the stage times of `o`.
+    pub fn add(&mut self, o: &FilmTimings) {
+        self.advect += o.advect;
+        self.transition += o.transition;
+        self.reseed += o.reseed;
+        self.forces += o.forces;
+        self.viscosity += o.viscosity;
+        self.operators += o.operators;
+        self.tension += o.tension;
+    }
+}
+
 /// What one film step did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FilmStepInfo {

@@ -16,8 +16,9 @@
 //!    the sheet weight in filament fits set to 0 (§7).
 //!
 //! Neighbourhoods and frames are built once after advection; stages 4–6
-//! reuse them (and the Laplacian rows of the reseeding's fit pass) when
-//! stages 2–3 changed nothing, and rebuild them once otherwise.
+//! reuse them when stages 2–3 changed nothing, and rebuild them once
+//! otherwise. The reseeding fits only the particles that propose a new one;
+//! the tension rows are fitted once, in stage 6.
 //!
 //! The step works on a sub-store of the sheet and filament particles in
 //! joint order (sheets then filaments) so that neighbour lists, frames and
@@ -25,22 +26,15 @@
 //! other particles first, in their previous order.
 
 use super::{FilmError, FilmParams, FilmState, FilmStepInfo};
-use crate::area::{
-    filament_areas, filament_length, filament_radius, sheet_half_thickness, surface_tension_area,
-    voronoi_area,
-};
-use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_force};
+use crate::coupling::surface::{particle_terms, SurfaceParams};
+use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_drag};
 use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
 use crate::math::{Mat3, Real, Vec3};
-use crate::mls::laplacian::{row_entries, Rows};
-use crate::mls::operators::{par_fit_map, par_frames, Neighborhoods};
-use crate::mls::{FitStats, Frame, JointLaplacian, MlsParams};
+use crate::mls::operators::{fit_particle, par_frames, Neighborhoods};
+use crate::mls::{Frame, JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
 use crate::reseed::{reseed_guarded, LocalShape};
-use crate::tension::{
-    bud_force, filament_role, rim_force, sawtooth, solve as solve_tension, FilamentRole,
-    TensionSystem,
-};
+use crate::tension::{solve as solve_tension, TensionSystem};
 use crate::transition::update_codims;
 use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
@@ -51,32 +45,45 @@ use std::time::Instant;
 struct Kept {
     nb: Neighborhoods,
     frames: Vec<Frame>,
-    rows: Option<(Rows, FitStats)>,
 }
 
-/// Local geometry of every joint particle, as a Taylor quadratic of its fit
-/// (scaled coordinates η = ξ/h): slope and second derivatives at η = 0.
-pub(crate) struct FittedShape {
-    pub(crate) h: Real,
-    pub(crate) geo: Vec<Option<([Real; 2], [Real; 3])>>,
+/// Local geometry of a joint particle for the reseeding, as the Taylor
+/// quadratic of its MLS fit (scaled coordinates η = ξ/h): slope and second
+/// derivatives at η = 0. Fitted on demand: only particles that propose a new
+/// particle need it (a few per step), so the reseeding no longer fits every
+/// particle (`docs/benchmarks.md`, "bench films").
+pub(crate) struct FittedShape<'a> {
+    pub(crate) nb: &'a Neighborhoods,
+    pub(crate) frames: &'a [Frame],
+    pub(crate) mls: &'a MlsParams,
 }
 
-impl LocalShape for FittedShape {
+impl FittedShape<'_> {
+    fn geo(&self, p: usize) -> Option<([Real; 2], [Real; 3])> {
+        fit_particle(self.nb, p, &self.frames[p], self.mls)
+            .fit()
+            .map(|f| (f.slope, f.second))
+    }
+}
+
+impl LocalShape for FittedShape<'_> {
     fn height(&self, p: usize, u: Real, v: Real) -> Real {
-        let Some((s, d)) = self.geo[p] else {
+        let Some((s, d)) = self.geo(p) else {
             return 0.0;
         };
-        let (a, b) = (u / self.h, v / self.h);
-        self.h * (s[0] * a + s[1] * b + 0.5 * (d[0] * a * a + 2.0 * d[1] * a * b + d[2] * b * b))
+        let h = self.mls.h;
+        let (a, b) = (u / h, v / h);
+        h * (s[0] * a + s[1] * b + 0.5 * (d[0] * a * a + 2.0 * d[1] * a * b + d[2] * b * b))
     }
     fn curve(&self, p: usize, u: Real) -> (Real, Real) {
-        let Some((s, d)) = self.geo[p] else {
+        let Some((s, d)) = self.geo(p) else {
             return (0.0, 0.0);
         };
-        let a = u / self.h;
+        let h = self.mls.h;
+        let a = u / h;
         (
-            self.h * (s[0] * a + 0.5 * d[0] * a * a),
-            self.h * (s[1] * a + 0.5 * d[1] * a * a),
+            h * (s[0] * a + 0.5 * d[0] * a * a),
+            h * (s[1] * a + 0.5 * d[1] * a * a),
         )
     }
 }
@@ -180,9 +187,9 @@ pub fn step(
         sheet_weight_in_filament: 0.0,
         ..prm.mls
     };
-    // neighbourhoods, frames and (speculatively) the tension Laplacian rows of
-    // stage 2, reused by stages 4–6 when neither the transitions nor the
-    // reseeding changed the particle set (same positions, same joint order)
+    // neighbourhoods and frames of stage 2, reused by stages 4–6 when neither
+    // the transitions nor the reseeding changed the particle set (same
+    // positions, same joint order)
     let mut kept: Option<Kept> = None;
     if !film.is_empty() && (prm.transitions.is_some() || prm.reseed.is_some()) {
         let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
@@ -263,26 +270,12 @@ pub fn step(
         info.timings.transition = t.elapsed().as_secs_f64();
         // 3. reseeding
         let t = Instant::now();
-        let mut rows = None;
         if let Some(rp) = &prm.reseed {
-            // one fit pass gives the reseeding's local shapes and, when the
-            // transitions left the set alone, the rows of the tension
-            // Laplacian (used if the reseeding changes nothing either)
-            let christoffel = geom_mls.christoffel;
-            let speculate = info.transitions.total() == 0;
-            let (both, stats) = par_fit_map(&nb, &frames, &geom_mls, |_, f| {
-                f.map_or((None, Vec::new()), |f| {
-                    let row = if speculate {
-                        row_entries(f, christoffel)
-                    } else {
-                        Vec::new()
-                    };
-                    (Some((f.slope, f.second)), row)
-                })
-            });
-            let (geo, r): (Vec<_>, Vec<_>) = both.into_iter().unzip();
-            rows = speculate.then_some((r, stats));
-            let shape = FittedShape { h, geo };
+            let shape = FittedShape {
+                nb: &nb,
+                frames: &frames,
+                mls: &geom_mls,
+            };
             // filament insertion only along line-like filament frames (the
             // frame of a particle that was a sheet until this step is a
             // sheet frame; a clump has no tangent)
@@ -298,9 +291,9 @@ pub fn step(
         let r = &info.reseed;
         let unchanged = info.transitions.total() == 0
             && r.sheet_inserted + r.sheet_removed + r.filament_inserted + r.filament_removed == 0
-            && r.absorbed + r.light_merged == 0;
+            && r.absorbed + r.light_merged + r.boundary_absorbed == 0;
         if unchanged {
-            kept = Some(Kept { nb, frames, rows });
+            kept = Some(Kept { nb, frames });
         }
     } else {
         info.timings.transition = t.elapsed().as_secs_f64();
@@ -319,115 +312,41 @@ pub fn step(
 
     // 4. areas, thickness, explicit forces
     let t = Instant::now();
-    let (nb, frames, rows) = match kept {
+    let (nb, frames) = match kept {
         Some(k) => {
             info.reused_neighborhoods = true;
-            (k.nb, k.frames, k.rows)
+            (k.nb, k.frames)
         }
         None => {
             let nb = Neighborhoods::build(&film.x, &film.codim, h)?;
             let frames = par_frames(&nb, &geom_mls);
-            (nb, frames, None)
+            (nb, frames)
         }
     };
     let n = film.len();
     let n_sheet = nb.n_sheet;
-    let rho = prm.density;
-    // one-face Voronoi areas of sheet particles (sheet neighbours only)
-    let voronoi: Vec<Real> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            if i >= n_sheet {
-                return 0.0;
-            }
-            let nbrs = nb
-                .lists
-                .of(i)
-                .iter()
-                .filter(|&&q| (q as usize) < n_sheet)
-                .map(|&q| film.x[q as usize]);
-            voronoi_area(&film.x[i], &frames[i].axes, nbrs, h)
-        })
-        .collect();
-    let lengths: Vec<Real> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            if i < n_sheet {
-                return 0.0;
-            }
-            let nbrs = nb
-                .lists
-                .of(i)
-                .iter()
-                .filter(|&&q| q as usize >= n_sheet)
-                .map(|&q| film.x[q as usize]);
-            filament_length(&film.x[i], nbrs, 0.5 * h)
-        })
-        .collect();
-    let roles: Vec<FilamentRole> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            filament_role(
-                i,
-                &frames[i].axes,
-                &film.x,
-                &film.codim,
-                nb.lists.of(i),
-                h,
-                prm.bud_angle,
-            )
-        })
-        .collect();
-    let mut area = vec![0.0; n];
-    let mut f = vec![Vec3::zeros(); n];
-    for i in 0..n {
-        if i < n_sheet {
-            if voronoi[i] > 0.0 {
-                film.radius[i] = sheet_half_thickness(film.mass[i], voronoi[i], rho);
-            }
-            area[i] = surface_tension_area(voronoi[i], prm.free_film);
-        } else {
-            let l = lengths[i];
-            let r = filament_radius(film.mass[i], l, rho);
+    // areas, radii and rim/bud forces: the code the coupled step uses
+    // (`coupling::surface::particle_terms`); every film sheet is free (two
+    // faces) when `free_film`
+    let sp = SurfaceParams {
+        mls: geom_mls,
+        sigma: prm.sigma,
+        density: prm.density,
+        bud_angle: prm.bud_angle,
+        rim_modulation: prm.rim_modulation,
+    };
+    let terms = particle_terms(&nb, &frames, |i| film.mass[i], |_| prm.free_film, &sp);
+    let voronoi: Vec<Real> = terms.iter().map(|t| t.voronoi).collect();
+    let area: Vec<Real> = terms.iter().map(|t| t.area).collect();
+    let mut f: Vec<Vec3> = terms.iter().map(|t| t.force).collect();
+    for (i, t) in terms.iter().enumerate() {
+        if let Some(r) = t.radius {
             film.radius[i] = r;
-            let a = filament_areas(r, l);
-            match roles[i] {
-                FilamentRole::Rim => {
-                    area[i] = a.rim_filament;
-                    let m = prm
-                        .rim_modulation
-                        .map_or(1.0, |(k, amp, c)| sawtooth(&film.x[i], &c, k, amp));
-                    f[i] += rim_force(
-                        i,
-                        &frames[i].axes,
-                        &film.x,
-                        &film.codim,
-                        nb.lists.of(i),
-                        prm.sigma,
-                        a.rim,
-                        r,
-                        m,
-                    );
-                }
-                FilamentRole::Bud => {
-                    area[i] = a.lateral;
-                    f[i] += bud_force(
-                        i,
-                        &frames[i].axes,
-                        &film.x,
-                        &film.codim,
-                        nb.lists.of(i),
-                        prm.sigma,
-                        a.bud,
-                        r,
-                    );
-                }
-                _ => area[i] = a.lateral,
-            }
         }
         f[i] += prm.gravity * film.mass[i] - film.v[i] * (prm.damping * film.mass[i]);
     }
     // enclosed gas and wind act along the sheet normals
+    let mut drag: Vec<Real> = Vec::new();
     if state.gas.is_some() || prm.wind.is_some() {
         let mut normals: Vec<Vec3> = frames[..n_sheet].iter().map(|fr| fr.axis(2)).collect();
         let sheet_nbrs: Vec<Vec<u32>> = (0..n_sheet)
@@ -462,15 +381,20 @@ pub fn step(
             }
         }
         if let Some(w) = &prm.wind {
+            drag = vec![0.0; n];
             for i in 0..n_sheet {
-                f[i] += wind_force(
+                // one-face area: the wind's pressure acts across the film;
+                // implicit in the normal velocity (`gas::wind_drag`)
+                let (d, fw) = wind_drag(
                     &w.velocity,
                     &film.v[i],
                     &normals[i],
-                    area[i],
+                    voronoi[i],
                     w.air_density,
                     w.drag,
                 );
+                drag[i] = d;
+                f[i] += fw;
             }
         }
     }
@@ -487,10 +411,7 @@ pub fn step(
 
     // 6. semi-implicit surface tension (eq. 16)
     let t = Instant::now();
-    let l = match rows {
-        Some((rows, stats)) => JointLaplacian::from_rows(&nb, rows, stats)?,
-        None => JointLaplacian::assemble_with_frames(&nb, &frames, &geom_mls)?,
-    };
+    let l = JointLaplacian::assemble_with_frames(&nb, &frames, &geom_mls)?;
     info.fits = l.stats;
     info.timings.operators = t.elapsed().as_secs_f64();
     let t = Instant::now();
@@ -502,6 +423,7 @@ pub fn step(
         u: &u,
         f_explicit: &f,
         fixed: &film.fixed,
+        drag: &drag,
         sigma: prm.sigma,
         dt,
     };
@@ -562,6 +484,15 @@ fn viscosity(
     Ok(info)
 }
 
+/// Largest particle speed, the motion limit's input. Points (C = 3) count
+/// too although they move ballistically: leaving them out lengthened the
+/// bursting bubble's substeps once droplets formed and changed its rim speed
+/// in the sixth frame (s = 4 mm) from 1.14 to 1.40 m/s (Taylor–Culick 1.0),
+/// so the rim needs those shorter steps (`docs/decisions.md`).
+pub fn film_speed(p: &Particles) -> Real {
+    p.v.iter().map(|v| v.norm()).fold(0.0, Real::max)
+}
+
 /// Runs [`step`], halving the step (up to `max_halvings` times) when a
 /// solve fails or a value turns non-finite; the state is restored before
 /// each retry. Returns the info of the last sub-step and the number of
@@ -616,7 +547,7 @@ pub fn advance_by(
     let mut left = duration;
     let mut n = 0;
     while left > 1e-12 * duration {
-        let vmax = parts.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+        let vmax = film_speed(parts);
         let mut dt = if vmax > 0.0 {
             left.min(cfl * spacing / vmax)
         } else {

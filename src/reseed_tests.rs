@@ -1,0 +1,215 @@
+//! Unit tests of [`crate::reseed`] (kept apart to keep the module short).
+use super::*;
+use crate::neighbors::neighbor_lists;
+
+fn flat_sheet(n: usize, s: Real, hole: Option<(usize, usize)>) -> Particles {
+    let mut p = Particles::new();
+    for i in 0..n {
+        for j in 0..n {
+            if Some((i, j)) == hole {
+                continue;
+            }
+            let v = Vec3::new(0.1 * i as Real, -0.2 * j as Real, 0.05);
+            p.push(
+                Vec3::new(i as Real * s, j as Real * s, 0.0),
+                v,
+                1.0 + 0.01 * (i + j) as Real,
+                0.01,
+                Codim::Sheet,
+            );
+        }
+    }
+    p
+}
+
+/// Reseeds `p` with identity frames (a sheet in the xy plane, filaments
+/// along x) and neighbour lists within h.
+fn reseed_identity(p: &mut Particles, shape: &dyn LocalShape, prm: &ReseedParams) -> ReseedCounts {
+    let frames = vec![Mat3::identity(); p.len()];
+    let nl = neighbor_lists(&p.x, prm.h);
+    reseed(p, &frames, |i| nl.of(i), shape, prm)
+}
+
+fn momentum(p: &Particles) -> Vec3 {
+    (0..p.len()).map(|i| p.v[i] * p.mass[i]).sum()
+}
+
+#[test]
+fn hole_in_sheet_is_filled_once_conserving_mass_and_momentum() {
+    let h = 0.1;
+    let s = 0.4 * h; // one particle per tangent cell
+    let mut p = flat_sheet(11, s, Some((5, 5)));
+    let (m0, j0) = (p.total_mass(), momentum(&p));
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
+    assert_eq!(c.sheet_inserted, 1, "{c:?}");
+    assert_eq!(c.sheet_removed, 0);
+    let new = p.len() - 1;
+    assert!((p.x[new] - Vec3::new(5.0 * s, 5.0 * s, 0.0)).norm() < 1e-12);
+    assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
+    assert!((momentum(&p) - j0).norm() < 1e-12 * j0.norm());
+}
+
+#[test]
+fn new_particle_lies_on_the_fitted_surface() {
+    struct Bowl;
+    impl LocalShape for Bowl {
+        fn height(&self, _: usize, u: Real, v: Real) -> Real {
+            u * u + v * v
+        }
+        fn curve(&self, _: usize, _: Real) -> (Real, Real) {
+            (0.0, 0.0)
+        }
+    }
+    let h = 0.1;
+    let mut p = flat_sheet(11, 0.4 * h, Some((5, 5)));
+    reseed_identity(&mut p, &Bowl, &ReseedParams::paper(h));
+    let new = *p.id.last().unwrap();
+    let k = p.id.iter().position(|&i| i == new).unwrap();
+    // seeded by some neighbour q: z = |x_new - x_q|² in q's frame
+    let z = p.x[k].z;
+    assert!(z > 0.0 && z <= 2.0 * (0.4 * h).powi(2) + 1e-12, "z = {z}");
+}
+
+#[test]
+fn close_pairs_are_merged_conserving_mass_and_momentum() {
+    let h = 0.1;
+    let mut p = flat_sheet(6, 0.4 * h, None);
+    p.push(
+        Vec3::new(0.401 * h, 0.0, 0.0),
+        Vec3::new(3.0, 0.0, 0.0),
+        2.0,
+        0.01,
+        Codim::Sheet,
+    );
+    let (m0, j0, n0) = (p.total_mass(), momentum(&p), p.len());
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
+    assert_eq!(c.sheet_removed, 1);
+    assert_eq!(c.sheet_inserted, 0);
+    assert_eq!(p.len(), n0 - 1);
+    assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
+    assert!((momentum(&p) - j0).norm() < 1e-12 * j0.norm());
+}
+
+#[test]
+fn stretched_filament_gains_a_particle_in_each_gap() {
+    let h = 0.1;
+    let mut p = Particles::new();
+    // spacing 0.4h except one gap of 0.8h between particles 4 and 5
+    let mut xs: Vec<Real> = (0..5).map(|i| i as Real * 0.4 * h).collect();
+    xs.extend((5..10).map(|i| (i as Real + 1.0) * 0.4 * h));
+    for x in xs {
+        p.push(
+            Vec3::new(x, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            1.0,
+            0.01,
+            Codim::Filament,
+        );
+    }
+    let m0 = p.total_mass();
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
+    assert_eq!(c.filament_inserted, 1, "{c:?}");
+    assert!(p
+        .x
+        .iter()
+        .any(|x| (x - Vec3::new(2.0 * h, 0.0, 0.0)).norm() < 1e-12));
+    assert!((p.total_mass() - m0).abs() < 1e-12);
+}
+
+#[test]
+fn fixed_particles_are_never_removed() {
+    let h = 0.1;
+    let mut p = Particles::new();
+    p.push(Vec3::zeros(), Vec3::zeros(), 1.0, 0.01, Codim::Sheet);
+    p.push(
+        Vec3::new(0.001, 0.0, 0.0),
+        Vec3::zeros(),
+        1.0,
+        0.01,
+        Codim::Sheet,
+    );
+    p.fixed[1] = true;
+    p.fixed[0] = true;
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
+    assert_eq!(c.sheet_removed, 0);
+    assert_eq!(p.len(), 2);
+}
+
+/// Rows 0.6 h apart along y, particles 0.15 h apart along x: no empty cell
+/// has all eight neighbours filled, so only the gap-line rule inserts, and
+/// it puts the new rows halfway between the old ones.
+#[test]
+fn gap_lines_fill_a_sheet_stretched_in_one_direction() {
+    let h = 0.1;
+    let mut base = Particles::new();
+    for j in 0..7 {
+        for i in 0..40 {
+            let x = Vec3::new(i as Real * 0.15 * h, j as Real * 0.6 * h, 0.0);
+            base.push(x, Vec3::new(0.0, 0.1, 0.0), 1.0, 0.01, Codim::Sheet);
+        }
+    }
+    let mut off = base.clone();
+    let c = reseed_identity(&mut off, &FlatShape, &ReseedParams::paper(h));
+    assert_eq!(c.sheet_inserted, 0, "{c:?}");
+    let prm = ReseedParams {
+        gap_lines: true,
+        ..ReseedParams::paper(h)
+    };
+    let (m0, j0) = (base.total_mass(), momentum(&base));
+    let mut on = base.clone();
+    let c = reseed_identity(&mut on, &FlatShape, &prm);
+    assert!(c.sheet_inserted > 0, "{c:?}");
+    for k in base.len()..on.len() {
+        // halfway between two rows (y = (j + 1/2) 0.6 h), inside the sheet
+        let r = on.x[k].y / (0.6 * h) - 0.5;
+        assert!(
+            (r - r.round()).abs() < 1e-9 && r > -0.1 && r < 5.1,
+            "{:?}",
+            on.x[k]
+        );
+    }
+    assert!((on.total_mass() - m0).abs() < 1e-12 * m0);
+    assert!((momentum(&on) - j0).norm() < 1e-12 * j0.norm());
+}
+
+#[test]
+fn rim_particles_reaching_a_ring_merge_into_it_and_the_ring_keeps_its_motion() {
+    let h = 0.1;
+    let mut p = Particles::new();
+    let ring_v = Vec3::new(0.0, 0.0, 0.05);
+    for i in 0..10 {
+        let k = p.push(
+            Vec3::new(i as Real * 0.3 * h, 0.0, 0.0),
+            ring_v,
+            2.0,
+            0.01,
+            Codim::Sheet,
+        );
+        p.fixed[k] = true;
+    }
+    // a rim particle 0.1 h from the ring, one 0.5 h away
+    p.push(
+        Vec3::new(0.3 * h, 0.1 * h, 0.0),
+        Vec3::new(0.0, -5.0, 0.0),
+        1.0,
+        0.01,
+        Codim::Filament,
+    );
+    p.push(
+        Vec3::new(0.3 * h, 0.5 * h, 0.0),
+        Vec3::new(0.0, -5.0, 0.0),
+        1.0,
+        0.01,
+        Codim::Filament,
+    );
+    let m0 = p.total_mass();
+    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
+    assert_eq!(c.boundary_absorbed, 1, "{c:?}");
+    assert_eq!(p.len(), 11);
+    assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
+    assert!((p.mass[1] - 3.0).abs() < 1e-12);
+    for i in 0..10 {
+        assert_eq!(p.v[i], ring_v);
+        assert!(p.fixed[i]);
+    }
+}
