@@ -170,7 +170,6 @@ pub fn redistance(
     info.seeds = seeds.iter().map(|v| v.len()).sum();
     let signs = SignField::new(&d, iso);
     drop(d);
-    let inside = |ijk: Key| signs.inside(ijk);
     let mask = |o: Key| signs.mask(o);
     info.flat_gradient = seeds.iter().flatten().filter(|s| s.1).count();
 
@@ -338,6 +337,7 @@ pub fn redistance(
                 let front_of = |s: usize| -> [u64; 8] { nb[s].map_or([0; 8], |j| fr[j]) };
                 let dil = dilate26(&front_of);
                 let mut out = Vec::new();
+                let mut sign: Option<[u64; 8]> = None;
                 for n in 0..LEAF_SIZE {
                     if dil[n >> 6] >> (n & 63) & 1 == 0 || leaf.is_set(n) {
                         continue;
@@ -377,9 +377,9 @@ pub fn redistance(
                                     let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
                                         continue;
                                     };
-                                    let lj = &g.leaves[j];
-                                    if lj.is_set(m) {
-                                        consider(lj, m, [dx, dy, dz]);
+                                    // only front neighbours can win (as above)
+                                    if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
+                                        consider(&g.leaves[j], m, [dx, dy, dz]);
                                     }
                                 }
                             }
@@ -392,7 +392,9 @@ pub fn redistance(
                     if dist > limit {
                         continue;
                     }
-                    let s = if inside([o[0] + k[0], o[1] + k[1], o[2] + k[2]]) {
+                    // the signs of this leaf's voxels (what `inside` gives), looked up once
+                    let sg = *sign.get_or_insert_with(|| mask(o));
+                    let s = if sg[n >> 6] >> (n & 63) & 1 == 1 {
                         -1.0
                     } else {
                         1.0
