@@ -404,14 +404,13 @@ pub fn build_kernels_owned(pos: Vec<Vec3>, vol: &[Real], dx: Real, p: &AnisoPara
             m2[0], m2[1], m2[2], m2[1], m2[3], m2[4], m2[2], m2[4], m2[5],
         ) / wsum
             - mean * mean.transpose();
-        let eig = nalgebra::SymmetricEigen::new(c);
-        let s1 = eig.eigenvalues.max();
-        if s1.is_nan() || s1 <= 0.0 || !s1.is_finite() {
+        let (eigenvalues, rm) = crate::eigen3::sym_eigen3(&c);
+        let s1 = eigenvalues.max();
+        if eigenvalues.iter().any(|s| !s.is_finite()) || s1 <= 0.0 {
             return iso(p.kn, false);
         }
         let floor = s1 / p.kr;
-        let sig = eig.eigenvalues.map(|s| ks * s.max(floor));
-        let rm = eig.eigenvectors;
+        let sig = eigenvalues.map(|s| ks * s.max(floor));
         let inv = Mat3::from_diagonal(&sig.map(|s| 1.0 / s));
         let g = rm * inv * rm.transpose() / h;
         let det = 1.0 / (sig.x * sig.y * sig.z * h * h * h);

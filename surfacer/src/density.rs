@@ -262,10 +262,16 @@ pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> Density
         .flat_map_iter(|i| {
             let (a, b) = block_box(k.center_of(i), k.extent_of(i), inv);
             let ids = &ids;
-            (a[0]..=b[0]).flat_map(move |x| {
-                (a[1]..=b[1]).flat_map(move |y| {
-                    (a[2]..=b[2]).filter_map(move |z| ids.get([x, y, z]).map(|id| (id, i as u32)))
-                })
+            // the box's blocks in (x, y, z) order, z fastest, as one flat range (nested flat_maps
+            // cost more than the look-ups on the 860 k kernels)
+            let n = [0, 1, 2].map(|k| (b[k] - a[k] + 1).max(0));
+            (0..n[0] * n[1] * n[2]).filter_map(move |t| {
+                let q = [
+                    a[0] + t / (n[1] * n[2]),
+                    a[1] + t / n[2] % n[1],
+                    a[2] + t % n[2],
+                ];
+                ids.get(q).map(|id| (id, i as u32))
             })
         })
         .collect();

@@ -19,6 +19,7 @@ pub mod anisotropy;
 pub mod band;
 pub mod cache;
 pub mod density;
+pub mod eigen3;
 pub mod error;
 pub mod filaments;
 pub mod hash;

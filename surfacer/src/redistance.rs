@@ -170,7 +170,6 @@ pub fn redistance(
     info.seeds = seeds.iter().map(|v| v.len()).sum();
     let signs = SignField::new(&d, iso);
     drop(d);
-    let inside = |ijk: Key| signs.inside(ijk);
     let mask = |o: Key| signs.mask(o);
     info.flat_gradient = seeds.iter().flatten().filter(|s| s.1).count();
 
@@ -208,6 +207,22 @@ pub fn redistance(
         front.push(set);
     }
     drop(seeds);
+    // the 27 neighbour leaves of each leaf (slot (dx+1)·9 + (dy+1)·3 + dz+1, NONE if missing),
+    // kept up to date as leaves are created instead of hashing 27 origins per leaf and layer
+    let slot_key = |o: Key, sl: usize| -> Key {
+        let d = [sl as i32 / 9 - 1, sl as i32 / 3 % 3 - 1, sl as i32 % 3 - 1];
+        [o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]]
+    };
+    let mut nbt: Vec<[u32; 27]> = {
+        let g = &grid;
+        (0..g.leaves.len())
+            .into_par_iter()
+            .map(|li| {
+                let o = g.leaves[li].origin;
+                std::array::from_fn(|sl| g.index.get(&slot_key(o, sl)).map_or(NONE, |&j| j as u32))
+            })
+            .collect()
+    };
 
     let layers = band.ceil() as usize + 1;
     let limit = (band + 1.0) * h;
@@ -217,6 +232,7 @@ pub fn redistance(
         // points is within the limit, and every set voxel was once front); sorted: deterministic
         let lim2 = (limit / (CP_UNIT * h)).powi(2);
         let g = &grid;
+        let nb_t = &nbt;
         let mut need: Vec<Key> = front
             .par_iter()
             .enumerate()
@@ -229,16 +245,7 @@ pub fn redistance(
                 let l = &g.leaves[li];
                 let o = l.origin;
                 // neighbour leaves that exist (slot (dx+1)·9 + (dy+1)·3 + dz+1)
-                let mut exists = [false; 27];
-                for (sl, e) in exists.iter_mut().enumerate() {
-                    let d = [sl as i32 / 9 - 1, sl as i32 / 3 % 3 - 1, sl as i32 % 3 - 1];
-                    *e = sl == 13
-                        || g.index.contains_key(&[
-                            o[0] + 8 * d[0],
-                            o[1] + 8 * d[1],
-                            o[2] + 8 * d[2],
-                        ]);
-                }
+                let exists: [bool; 27] = std::array::from_fn(|sl| nb_t[li][sl] != NONE);
                 let mut want = [false; 27];
                 if exists.iter().all(|&e| e) {
                     return Vec::new();
@@ -289,27 +296,28 @@ pub fn redistance(
         need.sort_unstable();
         need.dedup();
         for k in need {
-            grid.ensure(k, &mask);
+            let before = grid.leaves.len();
+            let li = grid.ensure(k, &mask);
+            if li == before {
+                let mut row = [NONE; 27];
+                for (sl, r) in row.iter_mut().enumerate() {
+                    if let Some(&j) = grid.index.get(&slot_key(k, sl)) {
+                        *r = j as u32;
+                        if j != li {
+                            nbt[j][26 - sl] = li as u32;
+                        }
+                    }
+                }
+                nbt.push(row);
+            }
         }
         front.resize(grid.leaves.len(), [0; 8]);
         // leaves that may receive new values: those with or next to front voxels
         let g = &grid;
         let fr = &front;
+        let nb_t = &nbt;
         let nbrs = |li: usize| -> [Option<usize>; 27] {
-            let o = g.leaves[li].origin;
-            let mut r = [None; 27];
-            for (s, slot) in r.iter_mut().enumerate() {
-                let d = [
-                    (s / 9) as i32 - 1,
-                    (s / 3 % 3) as i32 - 1,
-                    (s % 3) as i32 - 1,
-                ];
-                *slot = g
-                    .index
-                    .get(&[o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]])
-                    .copied();
-            }
-            r
+            nb_t[li].map(|j| (j != NONE).then_some(j as usize))
         };
         let updates: Vec<(usize, Vec<Update>)> = (0..g.leaves.len())
             .into_par_iter()
@@ -338,6 +346,7 @@ pub fn redistance(
                 let front_of = |s: usize| -> [u64; 8] { nb[s].map_or([0; 8], |j| fr[j]) };
                 let dil = dilate26(&front_of);
                 let mut out = Vec::new();
+                let mut sign: Option<[u64; 8]> = None;
                 for n in 0..LEAF_SIZE {
                     if dil[n >> 6] >> (n & 63) & 1 == 0 || leaf.is_set(n) {
                         continue;
@@ -377,9 +386,9 @@ pub fn redistance(
                                     let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
                                         continue;
                                     };
-                                    let lj = &g.leaves[j];
-                                    if lj.is_set(m) {
-                                        consider(lj, m, [dx, dy, dz]);
+                                    // only front neighbours can win (as above)
+                                    if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
+                                        consider(&g.leaves[j], m, [dx, dy, dz]);
                                     }
                                 }
                             }
@@ -392,7 +401,9 @@ pub fn redistance(
                     if dist > limit {
                         continue;
                     }
-                    let s = if inside([o[0] + k[0], o[1] + k[1], o[2] + k[2]]) {
+                    // the signs of this leaf's voxels (what `inside` gives), looked up once
+                    let sg = *sign.get_or_insert_with(|| mask(o));
+                    let s = if sg[n >> 6] >> (n & 63) & 1 == 1 {
                         -1.0
                     } else {
                         1.0
@@ -422,7 +433,7 @@ pub fn redistance(
     }
     // leaves the band never reached hold only ±background, which the signs give anyway; the
     // closest points are no longer needed (3 of the 7 kB per leaf)
-    drop(front);
+    drop((front, nbt));
     grid.leaves.retain(|l| l.set.iter().any(|&w| w != 0));
     grid.leaves.par_iter_mut().for_each(|l| l.cp = Vec::new());
     crate::alloc::trim();
@@ -451,6 +462,9 @@ pub fn redistance(
         .collect();
     (grid, extra_inside, signs, info)
 }
+
+/// No neighbour leaf in a slot of the neighbour table.
+const NONE: u32 = u32::MAX;
 
 const Z0: u64 = 0x0101_0101_0101_0101;
 const Z7: u64 = 0x8080_8080_8080_8080;

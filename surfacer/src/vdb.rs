@@ -132,8 +132,14 @@ enum Kind {
     Velocity,
 }
 
+/// Little-endian bytes of the values, 4 at a time (collecting a byte-wise `flat_map` cost ~3 %
+/// of the surfacing CPU on the benchmark blob).
 fn f32_bytes(v: impl Iterator<Item = f32>) -> Vec<u8> {
-    v.flat_map(|x| x.to_le_bytes()).collect()
+    let mut out = Vec::with_capacity(4 * v.size_hint().0);
+    for x in v {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    out
 }
 
 fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
