@@ -44,7 +44,7 @@ use faer::sparse::{SparseRowMat, Triplet};
 /// it: a massless face outside the sheet would make entries of size
 /// w/θ → ∞ in A and in the μ block. The reduced form uses the same bound so
 /// that both forms solve the same equations.
-pub const MASS_FLOOR: Real = 0.02;
+pub const MASS_FLOOR: Real = 0.05;
 
 /// θ_f of constraint face `f` (both forms use the same, so that they solve
 /// the same equations).
