@@ -146,10 +146,11 @@ fn dripping_jet_leaves_the_nozzle_at_the_jet_speed() {
 }
 
 #[test]
-fn l2_oscillation_period_is_within_eight_percent_of_rayleigh_at_four_cells() {
+fn l2_oscillation_period_is_within_nine_percent_of_rayleigh_at_four_cells() {
     // R = 4 Δx, e = 0.05, Δt = 0.01 s: ω² = 8σ/(ρR³), period 0.587 s.
-    // Measured +6.4 % with the constraint faces' mass taken inside the sheet,
-    // +35 % when it was the pressure level set's (docs/decisions.md).
+    // Measured +7.6 % with the constraint faces' mass taken inside the sheet
+    // (floor 0.05), +35 % when it was the pressure level set's
+    // (docs/decisions.md).
     let case = DropletCase {
         elongation: 0.05,
         ..DropletCase::paper(4.0)
@@ -157,7 +158,7 @@ fn l2_oscillation_period_is_within_eight_percent_of_rayleigh_at_four_cells() {
     assert_eq!(case.face_mass, FaceMass::Sheet);
     let o = oscillate(&case, 0.01).unwrap();
     assert!(
-        o.error.abs() < 0.08,
+        o.error.abs() < 0.09,
         "period {} s against Rayleigh's {} s ({:+.1} %)",
         o.period,
         o.rayleigh,
