@@ -130,6 +130,34 @@ pub fn substep(max_dt: Real, cfl: Real, spacing: Real, vmax: Real, rem: Real) ->
     }
 }
 
+/// Droplets (points) stop at the domain box: a droplet shot from a
+/// pinching neck at 10–30 m/s would otherwise fly metres away, set the
+/// substep through the motion limit and the preview's framing. It is put
+/// back on the wall and loses its outward velocity. Sheets and filaments
+/// are left alone (a bubble's retracting rim may pass the box). Returns
+/// the number of clamped coordinates (the manifest's `fallbacks.wall_clamps`).
+fn close_walls(p: &mut Particles, s: &Scene) -> usize {
+    let (lo, hi) = (s.domain.min, s.domain.max);
+    let mut n = 0;
+    for i in 0..p.len() {
+        if p.fixed[i] || p.codim[i] != Codim::Point {
+            continue;
+        }
+        for a in 0..3 {
+            if p.x[i][a] < lo[a] {
+                p.x[i][a] = lo[a];
+                p.v[i][a] = p.v[i][a].max(0.0);
+                n += 1;
+            } else if p.x[i][a] > hi[a] {
+                p.x[i][a] = hi[a];
+                p.v[i][a] = p.v[i][a].min(0.0);
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
 /// Advances the film from `t` to `t_end`, filling the frame record. Returns
 /// the number of substeps and the step range (min, max).
 pub fn advance(
@@ -179,6 +207,7 @@ pub fn advance(
         rec.transitions.add(&info.transitions);
         rec.reseed.add(&info.reseed);
         rec.fallbacks.step_halvings += halvings as u64;
+        rec.fallbacks.wall_clamps += close_walls(p, s) as u64;
         if s.film.max_speed > 0.0 {
             for v in p.v.iter_mut() {
                 let m = v.norm();
