@@ -105,20 +105,18 @@ fn encode_in_order(
 ) -> std::io::Result<()> {
     const CHUNK: usize = 1 << 14;
     const BATCH: usize = 16 * CHUNK;
+    // the chunk buffers are reused from batch to batch (no fresh pages per batch)
+    let mut bufs: Vec<Vec<u8>> = vec![Vec::new(); BATCH / CHUNK];
     for b in (0..n).step_by(BATCH) {
         let e = (b + BATCH).min(n);
-        let bufs: Vec<Vec<u8>> = (b..e)
-            .step_by(CHUNK)
-            .collect::<Vec<_>>()
-            .into_par_iter()
-            .map(|c| {
-                let mut buf = Vec::with_capacity(CHUNK * size);
-                for i in c..(c + CHUNK).min(e) {
-                    rec(i, &mut buf);
-                }
-                buf
-            })
-            .collect();
+        bufs.par_iter_mut().enumerate().for_each(|(j, buf)| {
+            buf.clear();
+            buf.reserve(CHUNK * size);
+            let c = b + j * CHUNK;
+            for i in c..(c + CHUNK).min(e) {
+                rec(i, buf);
+            }
+        });
         for buf in &bufs {
             w.write_all(buf)?;
         }

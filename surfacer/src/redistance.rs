@@ -295,13 +295,10 @@ pub fn redistance(
             .collect();
         need.sort_unstable();
         need.dedup();
-        // the new leaves (zero-filled, 7 kB each) built in parallel, then indexed in key order
+        // the new leaves, indexed in key order (built on this thread: see docs/decisions.md)
         need.retain(|k| !grid.index.contains_key(k));
-        let fresh: Vec<Box<WorkLeaf>> = need
-            .par_iter()
-            .map(|&k| WorkLeaf::new(k, bg, mask(k)))
-            .collect();
-        for (k, leaf) in need.into_iter().zip(fresh) {
+        for k in need {
+            let leaf = WorkLeaf::new(k, bg, mask(k));
             let li = grid.leaves.len();
             grid.index.insert(k, li);
             grid.leaves.push(leaf);
