@@ -8,7 +8,6 @@ use ply_rs_bw::ply::{
     Addable, ElementDef, Encoding, Header, PropertyAccess, PropertyDef, PropertyType, ScalarType,
 };
 use ply_rs_bw::writer::Writer;
-use rayon::prelude::*;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
@@ -76,50 +75,28 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh, comment: &str) -> Result<(), Surf
         let wr = Writer::<Row>::new();
         wr.write_header(w, &header)?;
         // the body as the header declares it (binary little endian), written directly: vertices
-        // as 9 f32, faces as a u8 count 3 and 3 i32. Encoded in parallel, 16 k records per
-        // chunk, at most 16 chunks at a time (a few MB), written in order: the same bytes
-        let vrec = |i: usize, buf: &mut Vec<u8>| {
+        // as 9 f32, faces as a u8 count 3 and 3 i32
+        let mut buf = Vec::with_capacity(1 << 16);
+        for i in 0..mesh.pos.len() {
             let (p, n, v) = (mesh.pos[i], mesh.normal[i], mesh.vel[i]);
             for x in [p.x, p.y, p.z, n.x, n.y, n.z, v.x, v.y, v.z] {
                 buf.extend_from_slice(&(x as f32).to_le_bytes());
             }
-        };
-        let frec = |i: usize, buf: &mut Vec<u8>| {
+            if buf.len() >= 1 << 16 {
+                w.write_all(&buf)?;
+                buf.clear();
+            }
+        }
+        for t in &mesh.tris {
             buf.push(3);
-            for &k in &mesh.tris[i] {
+            for &k in t {
                 buf.extend_from_slice(&(k as i32).to_le_bytes());
             }
-        };
-        encode_in_order(w, mesh.pos.len(), 36, &vrec)?;
-        encode_in_order(w, mesh.tris.len(), 13, &frec)
-    })
-}
-
-/// Writes records `0..n` (`size` bytes each, `rec(i, buf)` appends record i) in order, encoding
-/// batches of chunks in parallel.
-fn encode_in_order(
-    w: &mut impl Write,
-    n: usize,
-    size: usize,
-    rec: &(impl Fn(usize, &mut Vec<u8>) + Sync),
-) -> std::io::Result<()> {
-    const CHUNK: usize = 1 << 14;
-    const BATCH: usize = 16 * CHUNK;
-    // the chunk buffers are reused from batch to batch (no fresh pages per batch)
-    let mut bufs: Vec<Vec<u8>> = vec![Vec::new(); BATCH / CHUNK];
-    for b in (0..n).step_by(BATCH) {
-        let e = (b + BATCH).min(n);
-        bufs.par_iter_mut().enumerate().for_each(|(j, buf)| {
-            buf.clear();
-            buf.reserve(CHUNK * size);
-            let c = b + j * CHUNK;
-            for i in c..(c + CHUNK).min(e) {
-                rec(i, buf);
+            if buf.len() >= 1 << 16 {
+                w.write_all(&buf)?;
+                buf.clear();
             }
-        });
-        for buf in &bufs {
-            w.write_all(buf)?;
         }
-    }
-    Ok(())
+        w.write_all(&buf)
+    })
 }

@@ -295,23 +295,21 @@ pub fn redistance(
             .collect();
         need.sort_unstable();
         need.dedup();
-        // the new leaves, indexed in key order (built on this thread: see docs/decisions.md)
-        need.retain(|k| !grid.index.contains_key(k));
         for k in need {
-            let leaf = WorkLeaf::new(k, bg, mask(k));
-            let li = grid.leaves.len();
-            grid.index.insert(k, li);
-            grid.leaves.push(leaf);
-            let mut row = [NONE; 27];
-            for (sl, r) in row.iter_mut().enumerate() {
-                if let Some(&j) = grid.index.get(&slot_key(k, sl)) {
-                    *r = j as u32;
-                    if j != li {
-                        nbt[j][26 - sl] = li as u32;
+            let before = grid.leaves.len();
+            let li = grid.ensure(k, &mask);
+            if li == before {
+                let mut row = [NONE; 27];
+                for (sl, r) in row.iter_mut().enumerate() {
+                    if let Some(&j) = grid.index.get(&slot_key(k, sl)) {
+                        *r = j as u32;
+                        if j != li {
+                            nbt[j][26 - sl] = li as u32;
+                        }
                     }
                 }
+                nbt.push(row);
             }
-            nbt.push(row);
         }
         front.resize(grid.leaves.len(), [0; 8]);
         // leaves that may receive new values: those with or next to front voxels
@@ -321,13 +319,12 @@ pub fn redistance(
         let nbrs = |li: usize| -> [Option<usize>; 27] {
             nb_t[li].map(|j| (j != NONE).then_some(j as usize))
         };
-        // per leaf (empty: nothing new), applied below leaf by leaf in parallel
-        let updates: Vec<Vec<Update>> = (0..g.leaves.len())
+        let updates: Vec<(usize, Vec<Update>)> = (0..g.leaves.len())
             .into_par_iter()
-            .map(|li| {
+            .filter_map(|li| {
                 let nb = nbrs(li);
                 if nb.iter().flatten().all(|&j| fr[j].iter().all(|&w| w == 0)) {
-                    return Vec::new();
+                    return None;
                 }
                 let leaf = &g.leaves[li];
                 let o = leaf.origin;
@@ -413,29 +410,26 @@ pub fn redistance(
                     };
                     out.push((n, (s * dist) as f32, best.1, best.2));
                 }
-                out
+                (!out.is_empty()).then_some((li, out))
             })
             .collect();
-        if updates.iter().all(|u| u.is_empty()) {
+        if updates.is_empty() {
             break;
         }
-        info.propagated += grid
-            .leaves
-            .par_iter_mut()
-            .zip(front.par_iter_mut())
-            .zip(updates.into_par_iter())
-            .map(|((l, f), list)| {
-                *f = [0; 8];
-                for &(n, phi, cp, from) in &list {
-                    l.phi[n] = phi;
-                    l.cp[n] = cp;
-                    l.src[n] = from;
-                    l.set[n >> 6] |= 1 << (n & 63);
-                    f[n >> 6] |= 1 << (n & 63);
-                }
-                list.len()
-            })
-            .sum::<usize>();
+        for f in front.iter_mut() {
+            *f = [0; 8];
+        }
+        for (li, list) in updates {
+            let l = &mut grid.leaves[li];
+            for (n, phi, cp, from) in list {
+                l.phi[n] = phi;
+                l.cp[n] = cp;
+                l.src[n] = from;
+                l.set[n >> 6] |= 1 << (n & 63);
+                front[li][n >> 6] |= 1 << (n & 63);
+                info.propagated += 1;
+            }
+        }
     }
     // leaves the band never reached hold only ±background, which the signs give anyway; the
     // closest points are no longer needed (3 of the 7 kB per leaf)

@@ -14,7 +14,6 @@ use crate::hash::FxMap;
 use crate::levelset::{leaf_origin, voxel_index, Leaf, LevelSet, LEAF_DIM};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 mod cubes;
 pub use cubes::marching_cubes;
@@ -426,33 +425,26 @@ fn merge_blocks(parts: Vec<BlockMesh>) -> TriMesh {
     }
     crate::alloc::trim();
     keys.par_sort_unstable();
-    // one vertex per distinct key, in key order: group starts found and read in parallel, each
-    // flat vertex's new index stored once (relaxed atomics: disjoint slots, same result)
-    let starts: Vec<usize> = (0..keys.len())
-        .into_par_iter()
-        .filter(|&s| s == 0 || keys[s].0 != keys[s - 1].0)
-        .collect();
-    let (pos, vel): (Vec<Vec3>, Vec<Vec3>) = starts
-        .par_iter()
-        .map(|&s| {
-            let (p, u) = (flat_pos[keys[s].1 as usize], flat_vel[keys[s].1 as usize]);
-            (
-                Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real),
-                Vec3::new(u[0] as Real, u[1] as Real, u[2] as Real),
-            )
-        })
-        .unzip();
-    let remap: Vec<AtomicU32> = (0..nv).map(|_| AtomicU32::new(0)).collect();
-    starts.par_iter().enumerate().for_each(|(id, &s)| {
-        let k = keys[s].0;
-        for e in keys[s..].iter().take_while(|e| e.0 == k) {
-            remap[e.1 as usize].store(id as u32, Relaxed);
+    let mut remap = vec![0u32; nv];
+    let mut pos = Vec::new();
+    let mut vel = Vec::new();
+    let mut s = 0;
+    while s < keys.len() {
+        let id = pos.len() as u32;
+        let (p, u): ([f32; 3], [f32; 3]) =
+            (flat_pos[keys[s].1 as usize], flat_vel[keys[s].1 as usize]);
+        pos.push(Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real));
+        vel.push(Vec3::new(u[0] as Real, u[1] as Real, u[2] as Real));
+        let mut e = s;
+        while e < keys.len() && keys[e].0 == keys[s].0 {
+            remap[keys[e].1 as usize] = id;
+            e += 1;
         }
-    });
-    drop(starts);
+        s = e;
+    }
     drop((keys, flat_pos, flat_vel));
     tris.par_iter_mut()
-        .for_each(|t| *t = t.map(|i| remap[i as usize].load(Relaxed)));
+        .for_each(|t| *t = t.map(|i| remap[i as usize]));
     let mut mesh = TriMesh {
         pos,
         vel,
