@@ -110,6 +110,19 @@ impl Particles {
         i
     }
 
+    /// Moves every particle of `other` to the end of this store (ids kept;
+    /// the next id is the larger of the two).
+    pub fn append(&mut self, other: Particles) {
+        self.next_id = self.next_id.max(other.next_id);
+        self.x.extend(other.x);
+        self.v.extend(other.v);
+        self.mass.extend(other.mass);
+        self.radius.extend(other.radius);
+        self.codim.extend(other.codim);
+        self.id.extend(other.id);
+        self.fixed.extend(other.fixed);
+    }
+
     /// Keeps the particles for which `keep[i]` is true, preserving order.
     pub fn retain(&mut self, keep: &[bool]) {
         assert_eq!(keep.len(), self.len(), "retain mask length");

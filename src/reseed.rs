@@ -119,6 +119,20 @@ pub struct ReseedCounts {
 }
 
 impl ReseedCounts {
+    /// Particles inserted (sheets and filaments).
+    pub fn inserted(&self) -> u64 {
+        self.sheet_inserted + self.filament_inserted
+    }
+
+    /// Particles removed: merged into a neighbour, absorbed by a rim or a ring.
+    pub fn removed(&self) -> u64 {
+        self.sheet_removed
+            + self.filament_removed
+            + self.absorbed
+            + self.light_merged
+            + self.boundary_absorbed
+    }
+
     /// Adds the counts of `o`.
     pub fn add(&mut self, o: &ReseedCounts) {
         self.sheet_inserted += o.sheet_inserted;

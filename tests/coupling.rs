@@ -122,13 +122,7 @@ fn dripping_jet_leaves_the_nozzle_at_the_jet_speed() {
     let (mut emitted, mut reseeded) = (0, 0i64);
     for f in &m.frames[1..] {
         emitted += f.emitted;
-        let r = &f.reseed;
-        reseeded += (r.sheet_inserted + r.filament_inserted) as i64
-            - (r.sheet_removed
-                + r.filament_removed
-                + r.absorbed
-                + r.light_merged
-                + r.boundary_absorbed) as i64;
+        reseeded += f.reseed.inserted() as i64 - f.reseed.removed() as i64;
         assert_eq!(f.fallbacks.coupling_method_switches, 0, "frame {}", f.frame);
         assert_eq!(f.pressure.unconverged, 0);
         assert!(f.speed.max < 0.5, "frame {}: {} m/s", f.frame, f.speed.max);

@@ -93,13 +93,7 @@ fn jets_emit_exact_layers_and_resume_byte_identically() {
     let (mut total, mut reseeded) = (0, 0i64);
     for (r, rb) in m.frames.iter().zip(&mb.frames) {
         total += r.emitted;
-        let c = &r.reseed;
-        reseeded += (c.sheet_inserted + c.filament_inserted) as i64
-            - (c.sheet_removed
-                + c.filament_removed
-                + c.absorbed
-                + c.light_merged
-                + c.boundary_absorbed) as i64;
+        reseeded += r.reseed.inserted() as i64 - r.reseed.removed() as i64;
         assert_eq!(r.emitted, rb.emitted, "frame {}", r.frame);
         // every particle was emitted, or inserted by reseeding (§9)
         let n: usize = r.counts.values().sum();

@@ -80,15 +80,7 @@ pub fn reseed_surface(
         i >= n_sheet && l1 > 0.0 && l2 <= LINE_RATIO * l1
     };
     let counts = reseed_guarded(&mut film, &axes, |i| nb.lists.of(i), &shape, prm, line_like);
-    let changed = counts.sheet_inserted
-        + counts.sheet_removed
-        + counts.filament_inserted
-        + counts.filament_removed
-        + counts.absorbed
-        + counts.light_merged
-        + counts.boundary_absorbed
-        > 0;
-    if !changed {
+    if counts.inserted() + counts.removed() == 0 {
         return Ok(counts);
     }
     held.sort_unstable();
@@ -111,14 +103,7 @@ pub fn reseed_surface(
         affine.resize(affine.len() + film.len(), [Vec3::zeros(); 3]);
     }
     parts.retain(&keep);
-    parts.next_id = parts.next_id.max(film.next_id);
-    parts.x.extend(film.x);
-    parts.v.extend(film.v);
-    parts.mass.extend(film.mass);
-    parts.radius.extend(film.radius);
-    parts.codim.extend(film.codim);
-    parts.id.extend(film.id);
-    parts.fixed.extend(film.fixed);
+    parts.append(film);
     Ok(counts)
 }
 

@@ -138,14 +138,7 @@ fn split(parts: &Particles) -> (Particles, Particles) {
 
 /// Re-joins the two parts (others first).
 fn join(mut others: Particles, film: Particles) -> Particles {
-    others.next_id = others.next_id.max(film.next_id);
-    others.x.extend(film.x);
-    others.v.extend(film.v);
-    others.mass.extend(film.mass);
-    others.radius.extend(film.radius);
-    others.codim.extend(film.codim);
-    others.id.extend(film.id);
-    others.fixed.extend(film.fixed);
+    others.append(film);
     others
 }
 
@@ -288,10 +281,8 @@ pub fn step(
                 reseed_guarded(&mut film, &axes, |i| nb.lists.of(i), &shape, rp, line_like);
         }
         info.timings.reseed = t.elapsed().as_secs_f64();
-        let r = &info.reseed;
         let unchanged = info.transitions.total() == 0
-            && r.sheet_inserted + r.sheet_removed + r.filament_inserted + r.filament_removed == 0
-            && r.absorbed + r.light_merged + r.boundary_absorbed == 0;
+            && info.reseed.inserted() + info.reseed.removed() == 0;
         if unchanged {
             kept = Some(Kept { nb, frames });
         }
