@@ -167,6 +167,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             },
             sigma: s.physics.surface_tension,
             density: s.physics.density,
+            viscosity: s.physics.viscosity,
             bud_angle: std::f64::consts::PI / 6.0,
             rim_modulation: s
                 .film

@@ -168,6 +168,10 @@ pub struct TensionSystem<'a> {
     /// the force −d u^{n+1} joins the system's diagonal (its target velocity
     /// goes into `f_explicit` as d u_target, see `gas::wind_drag`).
     pub drag: &'a [Real],
+    /// Kinematic viscosity ν = μ/ρ (m²/s) of an implicit MLS viscosity
+    /// (eq. 13, m u = m u* + μΔt V L u with V = m/ρ) solved together with the
+    /// tension; 0 when the caller solves viscosity separately or μ = 0.
+    pub nu: Real,
     /// Surface tension σ (N/m).
     pub sigma: Real,
     /// Time step Δt (s).
@@ -183,10 +187,10 @@ pub struct TensionSolution {
     pub info: [SolveInfo; 3],
 }
 
-/// Assembles A = I + Δt M⁻¹ D − σΔt² M⁻¹ S L: eq. (16) with every row
-/// divided by the particle's mass, so rows of light and heavy particles are
-/// on one scale (identity rows for fixed particles); D is the implicit drag
-/// (zero unless `drag` is given).
+/// Assembles A = I + Δt M⁻¹ D − (σΔt² M⁻¹ S + νΔt) L: eq. (16) with every
+/// row divided by the particle's mass, so rows of light and heavy particles
+/// are on one scale (identity rows for fixed particles); D is the implicit
+/// drag (zero unless `drag` is given), ν the implicit viscosity (eq. 13).
 pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveError> {
     let l = Csr::from_faer(sys.laplacian)?;
     let n = l.nrows;
@@ -199,7 +203,7 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
         }
         let d = sys.drag.get(i).map_or(0.0, |d| sys.dt * d / sys.mass[i]);
         t.push(Triplet::new(i, i, 1.0 + d));
-        let ci = c * sys.area[i] / sys.mass[i];
+        let ci = c * sys.area[i] / sys.mass[i] + sys.nu * sys.dt;
         for k in l.row_ptr[i]..l.row_ptr[i + 1] {
             t.push(Triplet::new(i, l.col[k], -ci * l.val[k]));
         }
@@ -293,6 +297,7 @@ mod tests {
             f_explicit: &f,
             fixed: &fixed,
             drag: &[],
+            nu: 0.0,
             sigma,
             dt,
         };
@@ -309,6 +314,44 @@ mod tests {
         }
         assert_eq!(sol.u[7], Vec3::new(0.0, 0.0, 0.3));
         assert!(sol.info.iter().all(|s| s.rel_residual <= 1e-8));
+    }
+
+    #[test]
+    fn implicit_viscosity_damps_a_ring_mode_at_the_backward_euler_rate() {
+        // σ = 0, ν > 0: u_z = cos(kθ) on a ring of radius R is an eigenmode of
+        // the Laplace–Beltrami operator (−k²/R²), so one implicit step gives
+        // u_z / (1 + νΔt k²/R²)
+        let (n, r, k) = (200, 0.05, 3.0);
+        let (x, l) = ring_laplacian(n, r);
+        let (nu, dt) = (1e-4, 0.01);
+        let u: Vec<Vec3> = x
+            .iter()
+            .map(|p| Vec3::new(0.0, 0.0, (k * p.y.atan2(p.x)).cos()))
+            .collect();
+        let (mass, area, f) = (vec![1e-6; n], vec![2e-5; n], vec![Vec3::zeros(); n]);
+        let fixed = vec![false; n];
+        let sys = TensionSystem {
+            laplacian: l.as_ref(),
+            mass: &mass,
+            area: &area,
+            x: &x,
+            u: &u,
+            f_explicit: &f,
+            fixed: &fixed,
+            drag: &[],
+            nu,
+            sigma: 0.0,
+            dt,
+        };
+        let sol = solve(&sys, &BicgstabParams::default()).unwrap();
+        let factor = 1.0 / (1.0 + nu * dt * k * k / (r * r));
+        for i in [0, 17, 101] {
+            let got = sol.u[i].z / u[i].z;
+            assert!(
+                (got - factor).abs() < 1e-3 * factor,
+                "{i}: {got} vs {factor}"
+            );
+        }
     }
 
     #[test]
@@ -331,6 +374,7 @@ mod tests {
             f_explicit: &f,
             fixed: &fixed,
             drag: &[],
+            nu: 0.0,
             sigma: 3.0,
             dt: 0.05,
         };

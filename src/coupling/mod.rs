@@ -200,6 +200,7 @@ pub fn solve(
     let sc = Scalars {
         dt,
         sigma: prm.surface.sigma,
+        viscosity: prm.surface.viscosity,
         density: prm.surface.density,
         dx: grid.dx,
     };
@@ -221,6 +222,7 @@ pub fn solve(
                 f_explicit: &surf.force,
                 fixed: &surf.fixed,
                 drag: &[],
+                nu: prm.surface.viscosity / prm.surface.density,
                 sigma: prm.surface.sigma,
                 dt,
             };

@@ -32,6 +32,9 @@ pub struct SurfaceParams {
     pub sigma: Real,
     /// Liquid density ρ (kg/m³).
     pub density: Real,
+    /// Dynamic viscosity μ (Pa·s) of the implicit MLS viscosity (eq. 13) on
+    /// free sheets and filaments, solved with the tension; 0 skips it.
+    pub viscosity: Real,
     /// Half-aperture of the bud cone test (rad).
     pub bud_angle: Real,
     /// Rim tension modulation (fluid polygon, §10.2): teeth, amplitude, centre.

@@ -10,6 +10,8 @@
 //! - cell c (eq. 20):    A q + Σ_f s_{c,f} (w_f/θ_f) μ_f = b_c
 //! - particle (i, d) (eqs. 21/22, negated as in eq. 24):
 //!   −m̂_i u_{i,d} + ĉ_i Σ_j L_ij u_{j,d} − Σ_{f: axis d} J_{f,i} w_f μ_f
+//!   (ĉ_i also holds μΔt m_i/(ρ ρΔx³), the implicit MLS viscosity of eq. 13,
+//!   on particles that are not a volume's surface layer)
 //!   = −[m u** + Δt (σ S L x + f_explicit)]_{i,d} / (ρΔx³)
 //! - face f (eq. 23, times w_f):
 //!   Σ_c s_{c,f} (w_f/θ_f) q_c + (w_f/θ_f) μ_f − w_f (J u)_f = −w_f v**_f
@@ -60,6 +62,8 @@ pub struct Scalars {
     pub dt: Real,
     /// Surface tension σ (N/m).
     pub sigma: Real,
+    /// Dynamic viscosity μ (Pa·s) of the free sheets and filaments (eq. 13).
+    pub viscosity: Real,
     /// Density ρ (kg/m³).
     pub density: Real,
     /// Cell size Δx (m).
@@ -171,7 +175,15 @@ pub fn assemble(
                 rhs[r] = -mh * surf.u[i][d];
                 continue;
             }
-            let ch = sc.sigma * sc.dt * sc.dt * surf.area[i] / vol;
+            // implicit tension, and for particles that are not the surface
+            // layer of a volume (whose velocity the grid's viscosity sets)
+            // the implicit MLS viscosity μΔt V L u of eq. (13), V = m/ρ
+            let visc = if surf.attached[i] {
+                0.0
+            } else {
+                sc.viscosity * sc.dt * surf.mass[i] / sc.density
+            };
+            let ch = (sc.sigma * sc.dt * sc.dt * surf.area[i] + visc) / vol;
             for kk in l.row_ptr[i]..l.row_ptr[i + 1] {
                 t.push(Triplet::new(r, uo + 3 * l.col[kk] + d, ch * l.val[kk]));
             }

@@ -281,8 +281,8 @@ pub fn step(
                 reseed_guarded(&mut film, &axes, |i| nb.lists.of(i), &shape, rp, line_like);
         }
         info.timings.reseed = t.elapsed().as_secs_f64();
-        let unchanged = info.transitions.total() == 0
-            && info.reseed.inserted() + info.reseed.removed() == 0;
+        let unchanged =
+            info.transitions.total() == 0 && info.reseed.inserted() + info.reseed.removed() == 0;
         if unchanged {
             kept = Some(Kept { nb, frames });
         }
@@ -323,6 +323,8 @@ pub fn step(
         mls: geom_mls,
         sigma: prm.sigma,
         density: prm.density,
+        // the film step solves viscosity on its own (stage 5)
+        viscosity: 0.0,
         bud_angle: prm.bud_angle,
         rim_modulation: prm.rim_modulation,
     };
@@ -415,6 +417,8 @@ pub fn step(
         f_explicit: &f,
         fixed: &film.fixed,
         drag: &drag,
+        // viscosity has its own solve above (stage 5)
+        nu: 0.0,
         sigma: prm.sigma,
         dt,
     };
