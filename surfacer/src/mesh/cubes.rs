@@ -136,19 +136,7 @@ pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
         .map_init(
             || vec![u32::MAX; E],
             |slot, &o| {
-                let mut nb = Nbhd {
-                    leaves: [None; 8],
-                    tile: [0.0; 8],
-                };
-                for s in 0..8 {
-                    let lo = leaf_origin([
-                        o[0] + LEAF_DIM * (s >> 2 & 1) as i32,
-                        o[1] + LEAF_DIM * (s >> 1 & 1) as i32,
-                        o[2] + LEAF_DIM * (s & 1) as i32,
-                    ]);
-                    nb.leaves[s] = ls.leaf(lo);
-                    nb.tile[s] = ls.value(lo);
-                }
+                let nb = Nbhd::gather(ls, o);
                 let mut verts: Vec<(u64, [f32; 3], [f32; 3])> = Vec::new();
                 let mut tris: Vec<[u32; 3]> = Vec::new();
                 if nb.leaves.iter().all(|l| l.is_none())

@@ -158,7 +158,26 @@ struct Nbhd<'a> {
     tile: [f32; 8],
 }
 
-impl Nbhd<'_> {
+impl<'a> Nbhd<'a> {
+    /// The leaves (or tile values) of the 2×2×2 leaf block whose lower
+    /// corner leaf is at `o`.
+    fn gather(ls: &'a LevelSet, o: [i32; 3]) -> Nbhd<'a> {
+        let mut nb = Nbhd {
+            leaves: [None; 8],
+            tile: [0.0; 8],
+        };
+        for s in 0..8 {
+            let lo = leaf_origin([
+                o[0] + LEAF_DIM * (s >> 2 & 1) as i32,
+                o[1] + LEAF_DIM * (s >> 1 & 1) as i32,
+                o[2] + LEAF_DIM * (s & 1) as i32,
+            ]);
+            nb.leaves[s] = ls.leaf(lo);
+            nb.tile[s] = ls.value(lo);
+        }
+        nb
+    }
+
     /// φ at local coordinates `l` (0..=8) of the block at `o`.
     #[inline]
     fn phi(&self, o: [i32; 3], l: [i32; 3]) -> f32 {
@@ -264,19 +283,7 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
     let parts: Vec<BlockMesh> = blocks
         .par_iter()
         .map(|&o| {
-            let mut nb = Nbhd {
-                leaves: [None; 8],
-                tile: [0.0; 8],
-            };
-            for s in 0..8 {
-                let lo = leaf_origin([
-                    o[0] + LEAF_DIM * (s >> 2 & 1) as i32,
-                    o[1] + LEAF_DIM * (s >> 1 & 1) as i32,
-                    o[2] + LEAF_DIM * (s & 1) as i32,
-                ]);
-                nb.leaves[s] = ls.leaf(lo);
-                nb.tile[s] = ls.value(lo);
-            }
+            let nb = Nbhd::gather(ls, o);
             let mut verts: Vec<(u64, [f32; 3], [f32; 3])> = Vec::new();
             let mut tris: Vec<[u32; 3]> = Vec::new();
             // edge key → local vertex index (each edge is shared by up to six tetrahedra)
