@@ -132,6 +132,34 @@ pub fn filament_length(xp: &Vec3, nbrs: impl Iterator<Item = Vec3>, fallback: Re
     }
 }
 
+/// Rim length (m) carried by rim particle `xp` with rim tangent `t` (unit):
+/// the inverse of the rim's line density at `xp`, estimated with the
+/// normalised 1-D kernel W(d) = 35/(32 w) (1 − (d/w)²)³ of the tangential
+/// offsets d = t·(x_j − x_p) of the filament neighbours `nbrs` (without
+/// `xp` itself), capped by `cap`.
+///
+/// A sheet that retracts faster than its edge particles merge leaves a rim
+/// one to two particles thick. With the nearest-neighbour length of
+/// [`filament_length`] every particle of such a band carries a full
+/// spacing, so the band's rim force σ S_r / r = 2σ l summed ~1.7 times
+/// 2σ per metre of rim in the bursting bubble, and the rim outran
+/// Taylor–Culick by 12–32 % (`docs/decisions.md`). The line density counts
+/// a band of k rows as k particles per spacing, so the rim's force per
+/// length stays 2σ. On a regular single row of spacing s the kernel sum is
+/// 1/s within 0.8 % for w ≥ 2s (0.2 % for w ≥ 3s).
+pub fn rim_length(xp: &Vec3, t: &Vec3, nbrs: impl Iterator<Item = Vec3>, w: Real, cap: Real) -> Real {
+    let k = 35.0 / (32.0 * w);
+    let mut density = k;
+    for q in nbrs {
+        let u = t.dot(&(q - xp)) / w;
+        if u.abs() < 1.0 {
+            let a = 1.0 - u * u;
+            density += k * a * a * a;
+        }
+    }
+    (1.0 / density).min(cap)
+}
+
 /// Areas used by the filament, rim and bud tension terms (paper Appendix D).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FilamentAreas {
@@ -179,6 +207,27 @@ pub fn filament_radius(m: Real, l: Real, rho: Real) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rim_length_counts_rows() {
+        let s = 1e-3;
+        let t = Vec3::x();
+        for (rows, phase) in [(1usize, 0.0), (1, 0.37), (2, 0.0), (2, 0.5), (3, 0.25)] {
+            // rows of spacing s along x, offset s across, row k shifted by k·phase·s
+            let mut nb = Vec::new();
+            for k in 0..rows {
+                for i in -20i32..=20 {
+                    let x = Vec3::new((i as Real + k as Real * phase) * s, k as Real * s, 0.0);
+                    if x.norm() > 0.0 && x.norm() < 3.0 * s {
+                        nb.push(x);
+                    }
+                }
+            }
+            let l = rim_length(&Vec3::zeros(), &t, nb.into_iter(), 3.0 * s, 10.0 * s);
+            let want = s / rows as Real;
+            assert!((l - want).abs() < 0.02 * want, "rows {rows} phase {phase}: {l} vs {want}");
+        }
+    }
 
     fn lattice_nbrs(s: Real, h: Real, hex: bool) -> Vec<Vec3> {
         let mut v = Vec::new();

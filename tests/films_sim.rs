@@ -149,12 +149,14 @@ fn bursting_bubble_rim_retracts_at_the_taylor_culick_speed_past_40_ms() {
     let speeds: Vec<f64> = arcs.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
     eprintln!("rim arcs {arcs:?}\nspeeds {speeds:?} (Taylor-Culick {v_tc})");
     // after the first frame (the rim forms) the rim moves at the
-    // Taylor-Culick speed, also well past 40 ms
+    // Taylor-Culick speed, also well past 40 ms (measured: -1.9 % mean,
+    // frames within -10 %..+7 %; before the rim's line density entered the
+    // rim force, +2..+9 %, at the preset's former 0.5-spacing substeps)
     let mean = (arcs[6] - arcs[1]) / (5.0 * dt);
-    assert!((mean / v_tc - 1.0).abs() < 0.15, "mean rim speed {mean}");
+    assert!((mean / v_tc - 1.0).abs() < 0.05, "mean rim speed {mean}");
     for (k, v) in speeds.iter().enumerate().skip(1) {
         assert!(
-            (v / v_tc - 1.0).abs() < 0.3,
+            (v / v_tc - 1.0).abs() < 0.15,
             "frame {}: rim speed {v}",
             k + 1
         );

@@ -11,7 +11,7 @@
 //! (a waterbell's or a polygon's sheet) and has two faces (Appendix D).
 
 use crate::area::{
-    filament_areas, filament_length, filament_radius, sheet_half_thickness, sphere_radius,
+    filament_areas, filament_length, filament_radius, rim_length, sheet_half_thickness, sphere_radius,
     surface_tension_area, voronoi_area,
 };
 use crate::math::{Real, Vec3};
@@ -197,31 +197,40 @@ pub fn particle_terms(
                     class: free as u8,
                 };
             }
-            let l = filament_length(
-                &nb.x[i],
+            let fil = || {
                 nbrs.iter()
                     .filter(|&&q| q as usize >= n_sheet)
-                    .map(|&q| nb.x[q as usize]),
-                0.5 * h,
-            );
+                    .map(|&q| nb.x[q as usize])
+            };
+            let l = filament_length(&nb.x[i], fil(), 0.5 * h);
+            let axes = &frames[i].axes;
+            let role = filament_role(i, axes, &nb.x, &codim, nbrs, h, prm.bud_angle);
+            // a rim particle carries its share of the rim's length
+            // (`rim_length`): a rim band k rows thick pulls with 2σ per metre,
+            // not 2kσ
+            let l = match role {
+                FilamentRole::Rim => {
+                    let t: Vec3 = axes.column(0).into();
+                    rim_length(&nb.x[i], &t, fil(), h, l)
+                }
+                _ => l,
+            };
             let r = filament_radius(m, l, prm.density).min(rmax);
             let a = filament_areas(r, l);
-            let axes = &frames[i].axes;
-            let (area, force, class) =
-                match filament_role(i, axes, &nb.x, &codim, nbrs, h, prm.bud_angle) {
-                    FilamentRole::Rim => {
-                        let md = prm
-                            .rim_modulation
-                            .map_or(1.0, |(k, amp, c)| sawtooth(&nb.x[i], &c, k, amp));
-                        let f = rim_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.rim, r, md);
-                        (a.rim_filament, f, 2)
-                    }
-                    FilamentRole::Bud => {
-                        let f = bud_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.bud, r);
-                        (a.lateral, f, 3)
-                    }
-                    _ => (a.lateral, Vec3::zeros(), 4),
-                };
+            let (area, force, class) = match role {
+                FilamentRole::Rim => {
+                    let md = prm
+                        .rim_modulation
+                        .map_or(1.0, |(k, amp, c)| sawtooth(&nb.x[i], &c, k, amp));
+                    let f = rim_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.rim, r, md);
+                    (a.rim_filament, f, 2)
+                }
+                FilamentRole::Bud => {
+                    let f = bud_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.bud, r);
+                    (a.lateral, f, 3)
+                }
+                _ => (a.lateral, Vec3::zeros(), 4),
+            };
             ParticleTerms {
                 voronoi: 0.0,
                 area,
