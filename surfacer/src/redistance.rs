@@ -14,7 +14,9 @@
 //! The sign of every voxel comes from f itself, so inside never depends on the propagation.
 use crate::density::{DensityField, SignField};
 use crate::hash::Key;
-use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, WorkLeaf, LEAF_SIZE};
+use crate::levelset::{
+    leaf_origin, voxel_index, voxel_of, WorkGrid, WorkLeaf, LEAF_DIM, LEAF_SIZE,
+};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -250,36 +252,36 @@ pub fn redistance(
                 if exists.iter().all(|&e| e) {
                     return Vec::new();
                 }
-                for n in 0..LEAF_SIZE {
-                    if fr[n >> 6] >> (n & 63) & 1 == 0 {
-                        continue;
-                    }
-                    let k = voxel_of([0, 0, 0], n);
-                    if k.iter().all(|&c| c > 0 && c < 7) {
-                        continue;
-                    }
-                    let c = l.cp[n];
-                    for dx in -1..=1i32 {
-                        for dy in -1..=1i32 {
-                            for dz in -1..=1i32 {
-                                let d = [dx, dy, dz];
-                                let side = |a: usize| {
-                                    let q = k[a] + d[a];
-                                    if q < 0 {
-                                        0
-                                    } else if q > 7 {
-                                        2
-                                    } else {
-                                        1
+                // front voxels on the leaf's faces, in index order (word x, bit 8y + z)
+                for (x, &w) in fr.iter().enumerate() {
+                    let mut bits = if x == 0 || x == 7 { w } else { w & FACE_YZ };
+                    while bits != 0 {
+                        let n = x * 64 + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let k = voxel_of([0, 0, 0], n);
+                        let c = l.cp[n];
+                        for dx in -1..=1i32 {
+                            for dy in -1..=1i32 {
+                                for dz in -1..=1i32 {
+                                    let d = [dx, dy, dz];
+                                    let side = |a: usize| {
+                                        let q = k[a] + d[a];
+                                        if q < 0 {
+                                            0
+                                        } else if q > 7 {
+                                            2
+                                        } else {
+                                            1
+                                        }
+                                    };
+                                    let sl = side(0) * 9 + side(1) * 3 + side(2);
+                                    if exists[sl] || want[sl] {
+                                        continue;
                                     }
-                                };
-                                let sl = side(0) * 9 + side(1) * 3 + side(2);
-                                if exists[sl] || want[sl] {
-                                    continue;
+                                    let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
+                                    let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
+                                    want[sl] = d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767);
                                 }
-                                let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
-                                let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
-                                want[sl] = d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767);
                             }
                         }
                     }
@@ -347,68 +349,72 @@ pub fn redistance(
                 let dil = dilate26(&front_of);
                 let mut out = Vec::new();
                 let mut sign: Option<[u64; 8]> = None;
-                for n in 0..LEAF_SIZE {
-                    if dil[n >> 6] >> (n & 63) & 1 == 0 || leaf.is_set(n) {
-                        continue;
-                    }
-                    let k = voxel_of([0, 0, 0], n);
-                    // nearest closest point among the set neighbours, in voxel units
-                    let mut best = (i64::MAX, [0i16; 3], 0u32);
-                    let mut consider = |lj: &WorkLeaf, m: usize, d: [i32; 3]| {
-                        let c = lj.cp[m];
-                        let e = [0, 1, 2].map(|a| c[a] as i64 + d[a] as i64 * 4096);
-                        let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                        if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
-                            best = (d2, e.map(|v| v as i16), lj.src[m]);
-                        }
-                    };
-                    if k.iter().all(|&c| c > 0 && c < 7) {
-                        // all 26 neighbours in this leaf, and only the front ones can win: a
-                        // voxel set before the previous layer had this candidate as a candidate
-                        // once (or its leaf was not needed) and was then farther than the limit,
-                        // so it cannot give a distance within the limit now. The front bits
-                        // around the voxel, 3 rows of 3 per x-word, in (dx, dy, dz) order
-                        let sh = 8 * (k[1] - 1) + (k[2] - 1);
-                        for dx in -1..=1 {
-                            let mut bits = (fr[li][(k[0] + dx) as usize] >> sh) & 0x07_0707;
-                            while bits != 0 {
-                                let b = bits.trailing_zeros() as i32;
-                                bits &= bits - 1;
-                                let (dy, dz) = (b / 8 - 1, b % 8 - 1);
-                                let m = (n as i32 + dx * 64 + dy * 8 + dz) as usize;
-                                consider(leaf, m, [dx, dy, dz]);
+                // candidates in index order (word x, bit 8y + z)
+                for x in 0..LEAF_DIM as usize {
+                    let mut cand = dil[x] & !leaf.set[x];
+                    while cand != 0 {
+                        let n = x * 64 + cand.trailing_zeros() as usize;
+                        cand &= cand - 1;
+                        let k = voxel_of([0, 0, 0], n);
+                        // nearest closest point among the set neighbours, in voxel units
+                        let mut best = (i64::MAX, [0i16; 3], 0u32);
+                        let mut consider = |lj: &WorkLeaf, m: usize, d: [i32; 3]| {
+                            let c = lj.cp[m];
+                            let e = [0, 1, 2].map(|a| c[a] as i64 + d[a] as i64 * 4096);
+                            let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                            if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
+                                best = (d2, e.map(|v| v as i16), lj.src[m]);
                             }
-                        }
-                    } else {
-                        for dx in -1..=1 {
-                            for dy in -1..=1 {
-                                for dz in -1..=1 {
-                                    let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
-                                        continue;
-                                    };
-                                    // only front neighbours can win (as above)
-                                    if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
-                                        consider(&g.leaves[j], m, [dx, dy, dz]);
+                        };
+                        if k.iter().all(|&c| c > 0 && c < 7) {
+                            // all 26 neighbours in this leaf, and only the front ones can win: a
+                            // voxel set before the previous layer had this candidate as a candidate
+                            // once (or its leaf was not needed) and was then farther than the limit,
+                            // so it cannot give a distance within the limit now. The front bits
+                            // around the voxel, 3 rows of 3 per x-word, in (dx, dy, dz) order
+                            let sh = 8 * (k[1] - 1) + (k[2] - 1);
+                            for dx in -1..=1 {
+                                let mut bits = (fr[li][(k[0] + dx) as usize] >> sh) & 0x07_0707;
+                                while bits != 0 {
+                                    let b = bits.trailing_zeros() as i32;
+                                    bits &= bits - 1;
+                                    let (dy, dz) = (b / 8 - 1, b % 8 - 1);
+                                    let m = (n as i32 + dx * 64 + dy * 8 + dz) as usize;
+                                    consider(leaf, m, [dx, dy, dz]);
+                                }
+                            }
+                        } else {
+                            for dx in -1..=1 {
+                                for dy in -1..=1 {
+                                    for dz in -1..=1 {
+                                        let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz])
+                                        else {
+                                            continue;
+                                        };
+                                        // only front neighbours can win (as above)
+                                        if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
+                                            consider(&g.leaves[j], m, [dx, dy, dz]);
+                                        }
                                     }
                                 }
                             }
                         }
+                        if best.0 == i64::MAX {
+                            continue;
+                        }
+                        let dist = (best.0 as Real).sqrt() * CP_UNIT * h;
+                        if dist > limit {
+                            continue;
+                        }
+                        // the signs of this leaf's voxels (what `inside` gives), looked up once
+                        let sg = *sign.get_or_insert_with(|| mask(o));
+                        let s = if sg[n >> 6] >> (n & 63) & 1 == 1 {
+                            -1.0
+                        } else {
+                            1.0
+                        };
+                        out.push((n, (s * dist) as f32, best.1, best.2));
                     }
-                    if best.0 == i64::MAX {
-                        continue;
-                    }
-                    let dist = (best.0 as Real).sqrt() * CP_UNIT * h;
-                    if dist > limit {
-                        continue;
-                    }
-                    // the signs of this leaf's voxels (what `inside` gives), looked up once
-                    let sg = *sign.get_or_insert_with(|| mask(o));
-                    let s = if sg[n >> 6] >> (n & 63) & 1 == 1 {
-                        -1.0
-                    } else {
-                        1.0
-                    };
-                    out.push((n, (s * dist) as f32, best.1, best.2));
                 }
                 (!out.is_empty()).then_some((li, out))
             })
@@ -467,6 +473,8 @@ pub fn redistance(
 const NONE: u32 = u32::MAX;
 
 const Z0: u64 = 0x0101_0101_0101_0101;
+/// Bits of an x-word on the y or z faces of a leaf (y = 0, y = 7, z = 0, z = 7).
+const FACE_YZ: u64 = 0xFF | (0xFF << 56) | Z0 | Z7;
 const Z7: u64 = 0x8080_8080_8080_8080;
 
 /// Dilates a leaf's voxel mask by one voxel in all 26 directions, including the contributions of
