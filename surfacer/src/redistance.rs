@@ -422,20 +422,37 @@ pub fn redistance(
         if updates.is_empty() {
             break;
         }
-        for f in front.iter_mut() {
-            *f = [0; 8];
+        // applied leaf by leaf in parallel (each list belongs to one leaf; the lists are freed
+        // by the workers that built them)
+        info.propagated += updates.iter().map(|u| u.1.len()).sum::<usize>();
+        let mut slot = vec![u32::MAX; grid.leaves.len()];
+        for (k, u) in updates.iter().enumerate() {
+            slot[u.0] = k as u32;
         }
-        for (li, list) in updates {
-            let l = &mut grid.leaves[li];
-            for (n, phi, cp, from) in list {
-                l.phi[n] = phi;
-                l.cp[n] = cp;
-                l.src[n] = from;
-                l.set[n >> 6] |= 1 << (n & 63);
-                front[li][n >> 6] |= 1 << (n & 63);
-                info.propagated += 1;
-            }
-        }
+        let mut lists: Vec<Option<Vec<Update>>> = updates.into_iter().map(|u| Some(u.1)).collect();
+        let lists_at = ListSlots(lists.as_mut_ptr());
+        grid.leaves
+            .par_iter_mut()
+            .zip(front.par_iter_mut())
+            .zip(slot.par_iter())
+            .for_each(|((l, fr), &k)| {
+                *fr = [0; 8];
+                if k == u32::MAX {
+                    return;
+                }
+                let lists_at = &lists_at;
+                // SAFETY: `slot` maps distinct leaves to distinct lists, so each list is taken
+                // by exactly one leaf
+                let list = unsafe { (*lists_at.0.add(k as usize)).take() }.unwrap_or_default();
+                for (n, phi, cp, from) in list {
+                    l.phi[n] = phi;
+                    l.cp[n] = cp;
+                    l.src[n] = from;
+                    l.set[n >> 6] |= 1 << (n & 63);
+                    fr[n >> 6] |= 1 << (n & 63);
+                }
+            });
+        drop(lists);
     }
     // leaves the band never reached hold only ±background, which the signs give anyway; the
     // closest points are no longer needed (3 of the 7 kB per leaf)
@@ -468,6 +485,11 @@ pub fn redistance(
         .collect();
     (grid, extra_inside, signs, info)
 }
+
+/// The per-leaf update lists of a layer, taken by the leaves in parallel.
+struct ListSlots(*mut Option<Vec<Update>>);
+// SAFETY: each list is taken by exactly one leaf (see its use in `redistance`)
+unsafe impl Sync for ListSlots {}
 
 /// No neighbour leaf in a slot of the neighbour table.
 const NONE: u32 = u32::MAX;
