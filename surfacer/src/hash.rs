@@ -250,7 +250,7 @@ pub fn cell_of(p: &Vec3, inv_h: Real) -> Key {
 #[inline]
 fn floor_i(x: Real) -> i32 {
     let i = x as i32;
-    i - ((i as Real) > x) as i32
+    i.saturating_sub(((i as Real) > x) as i32)
 }
 
 /// Stable counting sort of the indices `0..keys.len()` by `keys` (each < `buckets`): (start of
