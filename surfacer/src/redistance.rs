@@ -173,7 +173,10 @@ pub fn redistance(
     let signs = SignField::new(&d, iso);
     drop(d);
     let mask = |o: Key| signs.mask(o);
-    info.flat_gradient = seeds.iter().flatten().filter(|s| s.1).count();
+    info.flat_gradient = seeds
+        .par_iter()
+        .map(|v| v.iter().filter(|s| s.1).count())
+        .sum();
 
     let mut grid = WorkGrid::new(h, bg);
     // one leaf per block with seeds, built in parallel; seed k (in block order) is velocity
@@ -295,24 +298,30 @@ pub fn redistance(
                     .collect::<Vec<Key>>()
             })
             .collect();
-        need.sort_unstable();
+        need.par_sort_unstable();
         need.dedup();
-        for k in need {
-            let before = grid.leaves.len();
-            let li = grid.ensure(k, &mask);
-            if li == before {
-                let mut row = [NONE; 27];
-                for (sl, r) in row.iter_mut().enumerate() {
-                    if let Some(&j) = grid.index.get(&slot_key(k, sl)) {
-                        *r = j as u32;
-                        if j != li {
-                            nbt[j][26 - sl] = li as u32;
-                        }
-                    }
+        // leaves created on the calling thread (see docs/decisions.md), then their neighbour
+        // rows looked up in parallel in the final index, and the links from older leaves set
+        let first_new = grid.leaves.len();
+        for &k in &need {
+            grid.ensure(k, &mask);
+        }
+        let g = &grid;
+        let rows: Vec<[u32; 27]> = (first_new..g.leaves.len())
+            .into_par_iter()
+            .map(|li| {
+                let k = g.leaves[li].origin;
+                std::array::from_fn(|sl| g.index.get(&slot_key(k, sl)).map_or(NONE, |&j| j as u32))
+            })
+            .collect();
+        for (t, row) in rows.iter().enumerate() {
+            for (sl, &j) in row.iter().enumerate() {
+                if j != NONE && (j as usize) < first_new {
+                    nbt[j as usize][26 - sl] = (first_new + t) as u32;
                 }
-                nbt.push(row);
             }
         }
+        nbt.extend(rows);
         front.resize(grid.leaves.len(), [0; 8]);
         // leaves that may receive new values: those with or next to front voxels
         let g = &grid;
