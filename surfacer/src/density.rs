@@ -119,29 +119,21 @@ pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> Density
         k.deep[i].then(|| block_box(k.center_of(i), k.extent_of(i), inv))
     });
     interior.retain(|b| ids.get(b.map(|x| x >> 3)).is_none());
-    // (band block, kernel) pairs, in kernel order, then grouped by block (counting sort: each
-    // block's kernels stay in kernel order)
-    let pairs: Vec<(u32, u32)> = (0..nk)
-        .into_par_iter()
-        .flat_map_iter(|i| {
-            let (a, b) = block_box(k.center_of(i), k.extent_of(i), inv);
-            let ids = &ids;
-            // the box's blocks in (x, y, z) order, z fastest, as one flat range (nested flat_maps
-            // cost more than the look-ups on the 860 k kernels)
-            let n = [0, 1, 2].map(|k| (b[k] - a[k] + 1).max(0));
-            (0..n[0] * n[1] * n[2]).filter_map(move |t| {
-                let q = [
-                    a[0] + t / (n[1] * n[2]),
-                    a[1] + t / n[2] % n[1],
-                    a[2] + t % n[2],
-                ];
-                ids.get(q).map(|id| (id, i as u32))
-            })
-        })
-        .collect();
+    // kernels grouped by band block, each block's in kernel order (a counting sort over the
+    // kernels' boxes, without storing the 2.5 M (block, kernel) pairs)
+    let (start, list) = group_by_block(nk, band.len(), &|i, f| {
+        let (a, b) = block_box(k.center_of(i), k.extent_of(i), inv);
+        for x in a[0]..=b[0] {
+            for y in a[1]..=b[1] {
+                for z in a[2]..=b[2] {
+                    if let Some(id) = ids.get([x, y, z]) {
+                        f(id);
+                    }
+                }
+            }
+        }
+    });
     drop(ids);
-    let (start, list) = group_by_block(&pairs, band.len());
-    drop(pairs);
     let groups: Vec<(Key, usize, usize)> = (0..band.len())
         .filter(|&b| start[b + 1] > start[b])
         .map(|b| (band[b], start[b], start[b + 1]))
