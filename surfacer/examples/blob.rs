@@ -222,7 +222,7 @@ fn stages(f: &ParticleFrame) {
     mark("density");
     let (mut grid, extra, signs, _) = surfacer::redistance::redistance(d, 0.5, 3.0);
     mark("redistance");
-    surfacer::redistance::smooth_band(&mut grid, &|k| signs.inside(k), 1);
+    surfacer::redistance::smooth_band(&mut grid, &|o| signs.mask(o), 1);
     surfacer::redistance::conserve_volume(&mut grid, &signs, f.len() as f64 * dx.powi(3), 3.0);
     drop(signs);
     mark("smooth+volume");

@@ -12,7 +12,13 @@ use rayon::prelude::*;
 /// one pass damps them by ½ per tangential axis, while a sphere of radius R voxels moves by only
 /// ~½/R voxel (corrected by [`conserve_volume`] afterwards). Leaves are filtered independently from
 /// the unfiltered values (Jacobi), so the result does not depend on the thread count.
-pub fn smooth_band(grid: &mut WorkGrid, inside: &(impl Fn(Key) -> bool + Sync), iterations: usize) {
+/// `inside(origin)`: the inside bits of the leaf-sized block at `origin` (layout of
+/// [`SignField::mask`]), read for neighbours that are not band leaves.
+pub fn smooth_band(
+    grid: &mut WorkGrid,
+    inside: &(impl Fn(Key) -> [u64; 8] + Sync),
+    iterations: usize,
+) {
     let bg = grid.bg;
     for _ in 0..iterations {
         let g = &*grid;
@@ -24,16 +30,19 @@ pub fn smooth_band(grid: &mut WorkGrid, inside: &(impl Fn(Key) -> bool + Sync), 
                 // padded 10³ block of φ, index (x·10 + y)·10 + z
                 let mut p = [0f32; 1000];
                 let mut nb: [Option<usize>; 27] = [None; 27];
+                // inside bits of the neighbours that are not leaves (looked up once per slot)
+                let mut ins = [[0u64; 8]; 27];
                 for (sl, slot) in nb.iter_mut().enumerate() {
                     let d = [
                         (sl / 9) as i32 - 1,
                         (sl / 3 % 3) as i32 - 1,
                         (sl % 3) as i32 - 1,
                     ];
-                    *slot = g
-                        .index
-                        .get(&[o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]])
-                        .copied();
+                    let q = [o[0] + 8 * d[0], o[1] + 8 * d[1], o[2] + 8 * d[2]];
+                    *slot = g.index.get(&q).copied();
+                    if slot.is_none() {
+                        ins[sl] = inside(q);
+                    }
                 }
                 for x in -1..9i32 {
                     for y in -1..9i32 {
@@ -49,9 +58,10 @@ pub fn smooth_band(grid: &mut WorkGrid, inside: &(impl Fn(Key) -> bool + Sync), 
                             };
                             let sl = (s(x) * 9 + s(y) * 3 + s(z)) as usize;
                             let k = [o[0] + x, o[1] + y, o[2] + z];
+                            let m = voxel_index(k);
                             let v = match nb[sl] {
-                                Some(j) => g.leaves[j].phi[voxel_index(k)],
-                                None if inside(k) => -bg,
+                                Some(j) => g.leaves[j].phi[m],
+                                None if ins[sl][m >> 6] >> (m & 63) & 1 == 1 => -bg,
                                 None => bg,
                             };
                             p[(((x + 1) * 10 + y + 1) * 10 + z + 1) as usize] = v;

@@ -9,6 +9,7 @@
 //! built. Blocks are stored inline in one vector, so dropping the field returns its memory to the
 //! system at once.
 use crate::anisotropy::Kernels;
+use crate::blockset::{group_by_block, union_of_boxes, BlockIds};
 use crate::hash::{FxMap, Key};
 use crate::levelset::{leaf_origin, voxel_index, LEAF_DIM, LEAF_SIZE};
 use crate::{Real, Vec3};
@@ -100,135 +101,6 @@ fn block_box(c: Vec3, e: Vec3, inv: Real) -> ([i32; 3], [i32; 3]) {
     (lo, hi)
 }
 
-/// Blocks (at most this many) for which a dense table is used instead of hashing.
-const DENSE_BLOCKS: i64 = 1 << 22;
-
-/// Block origins (sorted, deduplicated) of the union of block boxes: a dense byte table over
-/// their bounds when that is small, per-thread hash sets otherwise.
-fn union_of_boxes(boxes: Vec<([i32; 3], [i32; 3])>) -> Vec<Key> {
-    union_of_boxes_with(boxes, DENSE_BLOCKS)
-}
-
-fn union_of_boxes_with(boxes: Vec<([i32; 3], [i32; 3])>, dense_limit: i64) -> Vec<Key> {
-    if boxes.is_empty() {
-        return Vec::new();
-    }
-    let (lo, hi) = boxes
-        .iter()
-        .fold(([i32::MAX; 3], [i32::MIN; 3]), |(l, h), b| {
-            (
-                [l[0].min(b.0[0]), l[1].min(b.0[1]), l[2].min(b.0[2])],
-                [h[0].max(b.1[0]), h[1].max(b.1[1]), h[2].max(b.1[2])],
-            )
-        });
-    let d = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1).max(0) as i64);
-    if d[0] * d[1] * d[2] <= dense_limit {
-        let (dy, dz) = (d[1] as usize, d[2] as usize);
-        let mut mark = vec![false; (d[0] * d[1] * d[2]) as usize];
-        for (a, b) in &boxes {
-            for x in a[0]..=b[0] {
-                for y in a[1]..=b[1] {
-                    let row = (((x - lo[0]) as usize) * dy + (y - lo[1]) as usize) * dz;
-                    mark[row + (a[2] - lo[2]) as usize..=row + (b[2] - lo[2]) as usize].fill(true);
-                }
-            }
-        }
-        return mark
-            .iter()
-            .enumerate()
-            .filter(|(_, &m)| m)
-            .map(|(n, _)| {
-                let (x, y, z) = (n / (dy * dz), n / dz % dy, n % dz);
-                [
-                    (x as i32 + lo[0]) * LEAF_DIM,
-                    (y as i32 + lo[1]) * LEAF_DIM,
-                    (z as i32 + lo[2]) * LEAF_DIM,
-                ]
-            })
-            .collect();
-    }
-    let sets = boxes
-        .par_iter()
-        .fold(FxMap::<Key, ()>::default, |mut m, (a, b)| {
-            for x in a[0]..=b[0] {
-                for y in a[1]..=b[1] {
-                    for z in a[2]..=b[2] {
-                        m.insert([x * LEAF_DIM, y * LEAF_DIM, z * LEAF_DIM], ());
-                    }
-                }
-            }
-            m
-        })
-        .reduce(FxMap::default, |mut a, b| {
-            a.extend(b);
-            a
-        });
-    let mut v: Vec<Key> = sets.into_keys().collect();
-    v.par_sort_unstable();
-    v
-}
-
-/// Block origin → index into a sorted list of blocks (dense table over their bounds when small).
-enum BlockIds {
-    Dense {
-        lo: [i32; 3],
-        d: [i32; 3],
-        id: Vec<u32>,
-    },
-    Sparse(FxMap<Key, u32>),
-}
-
-impl BlockIds {
-    fn new(blocks: &[Key]) -> Self {
-        Self::new_with(blocks, DENSE_BLOCKS)
-    }
-    fn new_with(blocks: &[Key], dense_limit: i64) -> Self {
-        let Some(first) = blocks.first() else {
-            return BlockIds::Sparse(FxMap::default());
-        };
-        let (mut lo, mut hi) = (*first, *first);
-        for b in blocks {
-            for a in 0..3 {
-                lo[a] = lo[a].min(b[a]);
-                hi[a] = hi[a].max(b[a]);
-            }
-        }
-        let lo = lo.map(|x| x >> 3);
-        let d = [0, 1, 2].map(|a| (hi[a] >> 3) - lo[a] + 1);
-        if (d[0] as i64) * (d[1] as i64) * (d[2] as i64) <= dense_limit {
-            let mut id = vec![u32::MAX; (d[0] * d[1] * d[2]) as usize];
-            for (n, b) in blocks.iter().enumerate() {
-                let q = [0, 1, 2].map(|a| (b[a] >> 3) - lo[a]);
-                id[((q[0] * d[1] + q[1]) * d[2] + q[2]) as usize] = n as u32;
-            }
-            BlockIds::Dense { lo, d, id }
-        } else {
-            BlockIds::Sparse(
-                blocks
-                    .iter()
-                    .enumerate()
-                    .map(|(n, &b)| (b, n as u32))
-                    .collect(),
-            )
-        }
-    }
-    /// Index of the block with block coordinates `q` (origin / 8).
-    #[inline]
-    fn get(&self, q: [i32; 3]) -> Option<u32> {
-        match self {
-            BlockIds::Dense { lo, d, id } => {
-                let r = [q[0] - lo[0], q[1] - lo[1], q[2] - lo[2]];
-                if (0..3).any(|a| r[a] < 0 || r[a] >= d[a]) {
-                    return None;
-                }
-                let v = id[((r[0] * d[1] + r[1]) * d[2] + r[2]) as usize];
-                (v != u32::MAX).then_some(v)
-            }
-            BlockIds::Sparse(m) => m.get(&q.map(|x| x * LEAF_DIM)).copied(),
-        }
-    }
-}
-
 /// Sums the kernels (with particle velocities `vel`, indexed by `k.index`) on the grid of voxel
 /// size `h`, in the *band blocks* only: blocks within `reach` (m) of a particle that is not deep
 /// (or within its kernel box and two voxels). Blocks that only deep kernels touch are recorded as
@@ -236,192 +108,40 @@ impl BlockIds {
 pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> DensityField {
     let inv = 1.0 / h;
     let nk = k.center.len();
-    let band = union_of_boxes(
-        (0..nk)
-            .into_par_iter()
-            .filter(|&i| !k.deep[i])
-            .map(|i| {
-                let e = k.extent_of(i).add_scalar(2.0 * h).sup(&Vec3::repeat(reach));
-                block_box(k.center_of(i), e, inv)
-            })
-            .collect(),
-    );
-    let ids = BlockIds::new(&band);
-    let mut interior = union_of_boxes(
-        (0..nk)
-            .into_par_iter()
-            .filter(|&i| k.deep[i])
-            .map(|i| block_box(k.center_of(i), k.extent_of(i), inv))
-            .collect(),
-    );
-    interior.retain(|b| ids.get(b.map(|x| x >> 3)).is_none());
-    // (band block, kernel) pairs, in kernel order, then grouped by block (counting sort: each
-    // block's kernels stay in kernel order)
-    let pairs: Vec<(u32, u32)> = (0..nk)
-        .into_par_iter()
-        .flat_map_iter(|i| {
-            let (a, b) = block_box(k.center_of(i), k.extent_of(i), inv);
-            let ids = &ids;
-            // the box's blocks in (x, y, z) order, z fastest, as one flat range (nested flat_maps
-            // cost more than the look-ups on the 860 k kernels)
-            let n = [0, 1, 2].map(|k| (b[k] - a[k] + 1).max(0));
-            (0..n[0] * n[1] * n[2]).filter_map(move |t| {
-                let q = [
-                    a[0] + t / (n[1] * n[2]),
-                    a[1] + t / n[2] % n[1],
-                    a[2] + t % n[2],
-                ];
-                ids.get(q).map(|id| (id, i as u32))
-            })
+    let band = union_of_boxes(nk, &|i| {
+        (!k.deep[i]).then(|| {
+            let e = k.extent_of(i).add_scalar(2.0 * h).sup(&Vec3::repeat(reach));
+            block_box(k.center_of(i), e, inv)
         })
-        .collect();
+    });
+    let ids = BlockIds::new(&band);
+    let mut interior = union_of_boxes(nk, &|i| {
+        k.deep[i].then(|| block_box(k.center_of(i), k.extent_of(i), inv))
+    });
+    interior.retain(|b| ids.get(b.map(|x| x >> 3)).is_none());
+    // kernels grouped by band block, each block's in kernel order (a counting sort over the
+    // kernels' boxes, without storing the 2.5 M (block, kernel) pairs)
+    let (start, list) = group_by_block(nk, band.len(), &|i, f| {
+        let (a, b) = block_box(k.center_of(i), k.extent_of(i), inv);
+        for x in a[0]..=b[0] {
+            for y in a[1]..=b[1] {
+                for z in a[2]..=b[2] {
+                    if let Some(id) = ids.get([x, y, z]) {
+                        f(id);
+                    }
+                }
+            }
+        }
+    });
     drop(ids);
-    let mut start = vec![0usize; band.len() + 1];
-    for &(b, _) in &pairs {
-        start[b as usize + 1] += 1;
-    }
-    for b in 0..band.len() {
-        start[b + 1] += start[b];
-    }
-    let mut fill = start.clone();
-    let mut list = vec![0u32; pairs.len()];
-    for &(b, i) in &pairs {
-        list[fill[b as usize]] = i;
-        fill[b as usize] += 1;
-    }
-    drop((pairs, fill));
     let groups: Vec<(Key, usize, usize)> = (0..band.len())
         .filter(|&b| start[b + 1] > start[b])
         .map(|b| (band[b], start[b], start[b + 1]))
         .collect();
+    let avx2 = has_avx2();
     let blocks: Vec<DensityBlock> = groups
         .par_iter()
-        .map(|&(origin, s, e)| {
-            // sums in f32, one row of 8 voxels (fixed x, y; z = 0..7) at a time: every row of a
-            // kernel's box is a quadratic s²(z) = C + z (B + z A) of the block-local z, evaluated
-            // on all 8 voxels (w = 0 where s² ≥ 1) without per-row bounds, in a fixed order
-            let mut f = [0f32; LEAF_SIZE];
-            let mut m = [[0f32; LEAF_SIZE]; 3];
-            let ob = Vec3::new(origin[0] as Real, origin[1] as Real, origin[2] as Real);
-            for &pi in &list[s..e] {
-                let i = pi as usize;
-                let ex = k.extent_of(i) * inv;
-                // centre in voxel units relative to the block; G in voxel units (q = Gv (x − c))
-                let c = k.center_of(i) * inv - ob;
-                let gs = k.g_sym(i);
-                let amp = k.amp[i];
-                let v = vel[k.index[i] as usize];
-                let lo = (c - ex).map(|x| ceil_i(x).max(0));
-                let hi = (c + ex).map(|x| floor_i(x).min(LEAF_DIM - 1));
-                if lo.z > hi.z {
-                    continue;
-                }
-                let mut row = |x: i32, y: i32, qa: Real, qb2: Real, qc: Real| {
-                    let (qa, qb2, qc) = (qa as f32, qb2 as f32, qc as f32);
-                    let base = ((x << 6) | (y << 3)) as usize;
-                    let fr = &mut f[base..base + 8];
-                    let mut w = [0f32; 8];
-                    for (z, wz) in w.iter_mut().enumerate() {
-                        let zz = z as f32;
-                        let t = (1.0 - (qc + zz * (qb2 + zz * qa))).max(0.0);
-                        *wz = amp * t * t * t;
-                    }
-                    for z in 0..8 {
-                        fr[z] += w[z];
-                    }
-                    for (a, ma) in m.iter_mut().enumerate() {
-                        let mr = &mut ma[base..base + 8];
-                        for z in 0..8 {
-                            mr[z] += w[z] * v[a];
-                        }
-                    }
-                };
-                if gs[1] == 0.0 && gs[2] == 0.0 && gs[4] == 0.0 && gs[0] == gs[3] && gs[0] == gs[5]
-                {
-                    // isotropic: s² = sc² (|x − c|² in the row) = sc² (ρ² + (z − c_z)²)
-                    let sc = gs[0] as Real * h;
-                    let (s2, r2) = (sc * sc, 1.0 / (sc * sc));
-                    for x in lo.x..=hi.x {
-                        let dx = x as Real - c.x;
-                        for y in lo.y..=hi.y {
-                            let dy = y as Real - c.y;
-                            let rxy = dx * dx + dy * dy;
-                            if rxy >= r2 {
-                                continue;
-                            }
-                            row(x, y, s2, -2.0 * s2 * c.z, s2 * (rxy + c.z * c.z));
-                        }
-                    }
-                    continue;
-                }
-                let g = k.g_of(i) * h;
-                let (gx, gy, gz) = (
-                    g.column(0).into_owned(),
-                    g.column(1).into_owned(),
-                    g.column(2).into_owned(),
-                );
-                // |u + z gz|² < 1 is a quadratic in z: rows where it has no root are skipped
-                let qa = gz.norm_squared();
-                if qa <= 0.0 {
-                    continue;
-                }
-                let u0 = -(g * c);
-                for x in lo.x..=hi.x {
-                    let ux = u0 + gx * x as Real;
-                    for y in lo.y..=hi.y {
-                        let u = ux + gy * y as Real;
-                        let (qb, qc) = (u.dot(&gz), u.norm_squared());
-                        if qb * qb - qa * (qc - 1.0) <= 0.0 {
-                            continue;
-                        }
-                        row(x, y, qa, 2.0 * qb, qc);
-                    }
-                }
-            }
-            let mut fo = [0f32; LEAF_SIZE];
-            let mut vo = [[0f32; 3]; LEAF_SIZE];
-            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-            for n in 0..LEAF_SIZE {
-                fo[n] = f[n];
-                if f[n] > 0.0 {
-                    for a in 0..3 {
-                        let v = m[a][n] / f[n];
-                        vo[n][a] = v;
-                        lo[a] = lo[a].min(v);
-                        hi[a] = hi[a].max(v);
-                    }
-                }
-            }
-            let mut vmin = [0f32; 3];
-            let mut vstep = [0f32; 3];
-            for a in 0..3 {
-                if lo[a] < hi[a] {
-                    vmin[a] = lo[a];
-                    vstep[a] = (hi[a] - lo[a]) / 65535.0;
-                } else if lo[a] == hi[a] {
-                    vmin[a] = lo[a];
-                }
-            }
-            let mut vq = [[0u16; 3]; LEAF_SIZE];
-            for n in 0..LEAF_SIZE {
-                if f[n] > 0.0 {
-                    for a in 0..3 {
-                        if vstep[a] > 0.0 {
-                            // non-negative: rounding by truncation of x + ½ (no libm call)
-                            vq[n][a] =
-                                ((vo[n][a] - vmin[a]) / vstep[a] + 0.5).clamp(0.0, 65535.0) as u16;
-                        }
-                    }
-                }
-            }
-            DensityBlock {
-                origin,
-                f: fo,
-                vq,
-                vmin,
-                vstep,
-            }
-        })
+        .map(|&(origin, s, e)| block_sums(k, vel, &list[s..e], origin, h, avx2))
         .collect();
     let index = blocks
         .iter()
@@ -433,6 +153,184 @@ pub fn rasterize(k: &Kernels, vel: &[[f32; 3]], h: Real, reach: Real) -> Density
         blocks,
         index,
         interior,
+    }
+}
+
+/// Whether the CPU has AVX2 (x86-64 only; checked once per call of [`rasterize`]).
+fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// [`block_sums_body`] compiled for AVX2 where the CPU has it (one 8-voxel row of f32 is one
+/// 256-bit register), for the x86-64 baseline otherwise. Same operations in the same order either
+/// way (no FMA is enabled, so nothing is contracted): the sums are bit-identical.
+fn block_sums(
+    k: &Kernels,
+    vel: &[[f32; 3]],
+    list: &[u32],
+    origin: Key,
+    h: Real,
+    avx2: bool,
+) -> DensityBlock {
+    #[cfg(target_arch = "x86_64")]
+    if avx2 {
+        // SAFETY: `avx2` comes from `is_x86_feature_detected!("avx2")`
+        return unsafe { block_sums_avx2(k, vel, list, origin, h) };
+    }
+    let _ = avx2;
+    block_sums_body(k, vel, list, origin, h)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn block_sums_avx2(
+    k: &Kernels,
+    vel: &[[f32; 3]],
+    list: &[u32],
+    origin: Key,
+    h: Real,
+) -> DensityBlock {
+    block_sums_body(k, vel, list, origin, h)
+}
+
+/// Sums the kernels `list` (in that order) on the block at `origin`, with their velocities.
+#[inline(always)]
+fn block_sums_body(
+    k: &Kernels,
+    vel: &[[f32; 3]],
+    list: &[u32],
+    origin: Key,
+    h: Real,
+) -> DensityBlock {
+    let inv = 1.0 / h;
+    // sums in f32, one row of 8 voxels (fixed x, y; z = 0..7) at a time: every row of a
+    // kernel's box is a quadratic s²(z) = C + z (B + z A) of the block-local z, evaluated
+    // on all 8 voxels (w = 0 where s² ≥ 1) without per-row bounds, in a fixed order
+    let mut f = [0f32; LEAF_SIZE];
+    let mut m = [[0f32; LEAF_SIZE]; 3];
+    let ob = Vec3::new(origin[0] as Real, origin[1] as Real, origin[2] as Real);
+    for &pi in list {
+        let i = pi as usize;
+        let ex = k.extent_of(i) * inv;
+        // centre in voxel units relative to the block; G in voxel units (q = Gv (x − c))
+        let c = k.center_of(i) * inv - ob;
+        let gs = k.g_sym(i);
+        let amp = k.amp[i];
+        let v = vel[k.index[i] as usize];
+        let lo = (c - ex).map(|x| ceil_i(x).max(0));
+        let hi = (c + ex).map(|x| floor_i(x).min(LEAF_DIM - 1));
+        if lo.z > hi.z {
+            continue;
+        }
+        let mut row = |x: i32, y: i32, qa: Real, qb2: Real, qc: Real| {
+            let (qa, qb2, qc) = (qa as f32, qb2 as f32, qc as f32);
+            let base = ((x << 6) | (y << 3)) as usize;
+            let fr = &mut f[base..base + 8];
+            let mut w = [0f32; 8];
+            for (z, wz) in w.iter_mut().enumerate() {
+                let zz = z as f32;
+                let t = (1.0 - (qc + zz * (qb2 + zz * qa))).max(0.0);
+                *wz = amp * t * t * t;
+            }
+            for z in 0..8 {
+                fr[z] += w[z];
+            }
+            for (a, ma) in m.iter_mut().enumerate() {
+                let mr = &mut ma[base..base + 8];
+                for z in 0..8 {
+                    mr[z] += w[z] * v[a];
+                }
+            }
+        };
+        if gs[1] == 0.0 && gs[2] == 0.0 && gs[4] == 0.0 && gs[0] == gs[3] && gs[0] == gs[5] {
+            // isotropic: s² = sc² (|x − c|² in the row) = sc² (ρ² + (z − c_z)²)
+            let sc = gs[0] as Real * h;
+            let (s2, r2) = (sc * sc, 1.0 / (sc * sc));
+            for x in lo.x..=hi.x {
+                let dx = x as Real - c.x;
+                for y in lo.y..=hi.y {
+                    let dy = y as Real - c.y;
+                    let rxy = dx * dx + dy * dy;
+                    if rxy >= r2 {
+                        continue;
+                    }
+                    row(x, y, s2, -2.0 * s2 * c.z, s2 * (rxy + c.z * c.z));
+                }
+            }
+            continue;
+        }
+        let g = k.g_of(i) * h;
+        let (gx, gy, gz) = (
+            g.column(0).into_owned(),
+            g.column(1).into_owned(),
+            g.column(2).into_owned(),
+        );
+        // |u + z gz|² < 1 is a quadratic in z: rows where it has no root are skipped
+        let qa = gz.norm_squared();
+        if qa <= 0.0 {
+            continue;
+        }
+        let u0 = -(g * c);
+        for x in lo.x..=hi.x {
+            let ux = u0 + gx * x as Real;
+            for y in lo.y..=hi.y {
+                let u = ux + gy * y as Real;
+                let (qb, qc) = (u.dot(&gz), u.norm_squared());
+                if qb * qb - qa * (qc - 1.0) <= 0.0 {
+                    continue;
+                }
+                row(x, y, qa, 2.0 * qb, qc);
+            }
+        }
+    }
+    let mut fo = [0f32; LEAF_SIZE];
+    let mut vo = [[0f32; 3]; LEAF_SIZE];
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for n in 0..LEAF_SIZE {
+        fo[n] = f[n];
+        if f[n] > 0.0 {
+            for a in 0..3 {
+                let v = m[a][n] / f[n];
+                vo[n][a] = v;
+                lo[a] = lo[a].min(v);
+                hi[a] = hi[a].max(v);
+            }
+        }
+    }
+    let mut vmin = [0f32; 3];
+    let mut vstep = [0f32; 3];
+    for a in 0..3 {
+        if lo[a] < hi[a] {
+            vmin[a] = lo[a];
+            vstep[a] = (hi[a] - lo[a]) / 65535.0;
+        } else if lo[a] == hi[a] {
+            vmin[a] = lo[a];
+        }
+    }
+    let mut vq = [[0u16; 3]; LEAF_SIZE];
+    for n in 0..LEAF_SIZE {
+        if f[n] > 0.0 {
+            for a in 0..3 {
+                if vstep[a] > 0.0 {
+                    // non-negative: rounding by truncation of x + ½ (no libm call)
+                    vq[n][a] = ((vo[n][a] - vmin[a]) / vstep[a] + 0.5).clamp(0.0, 65535.0) as u16;
+                }
+            }
+        }
+    }
+    DensityBlock {
+        origin,
+        f: fo,
+        vq,
+        vmin,
+        vstep,
     }
 }
 
@@ -493,47 +391,6 @@ impl SignField {
                 self.blocks[b].1[n >> 6] >> (n & 63) & 1 == 1
             }
             None => self.interior_index.contains_key(&o),
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn dense_and_hashed_block_sets_agree() {
-        let boxes = vec![
-            ([0, 0, 0], [2, 1, 3]),
-            ([-3, 1, 2], [-1, 1, 2]),
-            ([1, 1, 1], [4, 2, 2]),
-            ([40, -7, 9], [41, -7, 10]),
-        ];
-        let mut brute: Vec<Key> = Vec::new();
-        for (a, b) in &boxes {
-            for x in a[0]..=b[0] {
-                for y in a[1]..=b[1] {
-                    for z in a[2]..=b[2] {
-                        brute.push([x * 8, y * 8, z * 8]);
-                    }
-                }
-            }
-        }
-        brute.sort_unstable();
-        brute.dedup();
-        let dense = union_of_boxes_with(boxes.clone(), i64::MAX);
-        let hashed = union_of_boxes_with(boxes, 0);
-        assert_eq!(dense, brute);
-        assert_eq!(hashed, brute);
-        for ids in [
-            BlockIds::new_with(&brute, i64::MAX),
-            BlockIds::new_with(&brute, 0),
-        ] {
-            for (n, b) in brute.iter().enumerate() {
-                assert_eq!(ids.get(b.map(|x| x >> 3)), Some(n as u32));
-            }
-            assert_eq!(ids.get([5, 5, 5]), None);
-            assert_eq!(ids.get([100, 0, 0]), None);
         }
     }
 }

@@ -126,44 +126,40 @@ impl CellGrid {
     /// same order: by cell (x, then y, then z), then by index.
     fn build_with(points: &[Vec3], h: Real, dense_limit: i64) -> CellGrid {
         let inv_h = 1.0 / h;
+        let bounds = |(l, u): (Key, Key), (m, v): (Key, Key)| {
+            (
+                [l[0].min(m[0]), l[1].min(m[1]), l[2].min(m[2])],
+                [u[0].max(v[0]), u[1].max(v[1]), u[2].max(v[2])],
+            )
+        };
+        let empty = ([i32::MAX; 3], [i32::MIN; 3]);
         let (lo, hi) = points
-            .iter()
-            .fold(([i32::MAX; 3], [i32::MIN; 3]), |(l, u), p| {
+            .par_iter()
+            .map(|p| {
                 let k = cell_of(p, inv_h);
-                (
-                    [l[0].min(k[0]), l[1].min(k[1]), l[2].min(k[2])],
-                    [u[0].max(k[0]), u[1].max(k[1]), u[2].max(k[2])],
-                )
-            });
+                (k, k)
+            })
+            .reduce(|| empty, bounds);
         let dim = [0, 1, 2].map(|a| (hi[a] as i64 - lo[a] as i64 + 1).max(0));
         let ncells = dim[0] * dim[1] * dim[2];
         if !points.is_empty() && ncells <= dense_limit && ncells <= 4 * points.len() as i64 + 64 {
-            // counting sort by the dense cell index (stable: indices stay increasing per cell)
+            // stable counting sort by the dense cell index (indices stay increasing per cell)
             let dim = dim.map(|d| d as i32);
-            let index = |p: &Vec3| {
-                let k = cell_of(p, inv_h);
-                ((k[0] - lo[0]) as usize * dim[1] as usize + (k[1] - lo[1]) as usize)
-                    * dim[2] as usize
-                    + (k[2] - lo[2]) as usize
-            };
-            let mut start = vec![0u32; ncells as usize + 1];
-            for p in points {
-                start[index(p) + 1] += 1;
-            }
-            for c in 0..ncells as usize {
-                start[c + 1] += start[c];
-            }
-            let mut fill = start.clone();
-            let mut order = vec![0u32; points.len()];
-            for (i, p) in points.iter().enumerate() {
-                let c = index(p);
-                order[fill[c] as usize] = i as u32;
-                fill[c] += 1;
-            }
+            let cell: Vec<u32> = points
+                .par_iter()
+                .map(|p| {
+                    let k = cell_of(p, inv_h);
+                    (((k[0] - lo[0]) as usize * dim[1] as usize + (k[1] - lo[1]) as usize)
+                        * dim[2] as usize
+                        + (k[2] - lo[2]) as usize) as u32
+                })
+                .collect();
+            let (start, order) = counting_sort(&cell, ncells as usize);
+            drop(cell);
             return CellGrid {
                 inv_h,
                 cells: Cells::Dense { lo, dim, start },
-                sorted: order.iter().map(|&i| points[i as usize]).collect(),
+                sorted: order.par_iter().map(|&i| points[i as usize]).collect(),
                 order,
             };
         }
@@ -243,10 +239,72 @@ impl CellGrid {
 #[inline]
 pub fn cell_of(p: &Vec3, inv_h: Real) -> Key {
     [
-        (p.x * inv_h).floor() as i32,
-        (p.y * inv_h).floor() as i32,
-        (p.z * inv_h).floor() as i32,
+        floor_i(p.x * inv_h),
+        floor_i(p.y * inv_h),
+        floor_i(p.z * inv_h),
     ]
+}
+
+/// `x.floor() as i32` without a libm call (x86-64's baseline has no `roundsd`): the same value for
+/// every x, NaN and out-of-range values included (both saturate the same way).
+#[inline]
+fn floor_i(x: Real) -> i32 {
+    let i = x as i32;
+    i.saturating_sub(((i as Real) > x) as i32)
+}
+
+/// Stable counting sort of the indices `0..keys.len()` by `keys` (each < `buckets`): (start of
+/// each key's run, with a final end; the indices). Parallel over chunks of the keys, each chunk
+/// writing its own disjoint slots: the result is the serial sort's for any thread count. Chunks
+/// keep one count per bucket each, so only one is used when there are more buckets than keys.
+pub fn counting_sort(keys: &[u32], buckets: usize) -> (Vec<u32>, Vec<u32>) {
+    let n = keys.len();
+    let chunks = if buckets <= n {
+        rayon::current_num_threads().max(1)
+    } else {
+        1
+    };
+    let len = n.div_ceil(chunks).max(1 << 16);
+    let mut at: Vec<Vec<u32>> = keys
+        .par_chunks(len)
+        .map(|c| {
+            let mut m = vec![0u32; buckets];
+            for &k in c {
+                m[k as usize] += 1;
+            }
+            m
+        })
+        .collect();
+    let mut start = vec![0u32; buckets + 1];
+    for b in 0..buckets {
+        let mut s = start[b];
+        for c in at.iter_mut() {
+            let m = c[b];
+            c[b] = s;
+            s += m;
+        }
+        start[b + 1] = s;
+    }
+    let mut order: Vec<u32> = Vec::with_capacity(n);
+    struct Slots(*mut u32);
+    // SAFETY (Sync): chunks write disjoint slots (below)
+    unsafe impl Sync for Slots {}
+    let out = Slots(order.as_mut_ptr());
+    keys.par_chunks(len)
+        .zip(at.par_iter_mut())
+        .enumerate()
+        .for_each(|(ci, (c, at))| {
+            let out = &out;
+            for (j, &k) in c.iter().enumerate() {
+                let slot = &mut at[k as usize];
+                // SAFETY: the runs partition 0..n and each slot is claimed by one key once
+                unsafe { *out.0.add(*slot as usize) = (ci * len + j) as u32 };
+                *slot += 1;
+            }
+        });
+    // SAFETY: all n slots were written above
+    unsafe { order.set_len(n) };
+    (start, order)
 }
 
 #[cfg(test)]
@@ -273,6 +331,43 @@ mod tests {
                     .collect();
                 assert_eq!(found, brute, "cell {cell}");
             }
+        }
+    }
+
+    #[test]
+    fn floor_and_counting_sort_match_the_plain_versions() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            -1.0,
+            1.0,
+            2.9999,
+            -2.0001,
+            1e12,
+            -1e12,
+            Real::NAN,
+        ] {
+            assert_eq!(floor_i(x), x.floor() as i32, "{x}");
+        }
+        let mut r = 5u64;
+        let keys: Vec<u32> = (0..200_000)
+            .map(|_| {
+                r = r
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((r >> 33) % 1000) as u32
+            })
+            .collect();
+        let (start, order) = counting_sort(&keys, 1000);
+        let mut want: Vec<u32> = (0..keys.len() as u32).collect();
+        want.sort_by_key(|&i| keys[i as usize]);
+        assert_eq!(order, want);
+        assert_eq!(start[1000] as usize, keys.len());
+        for b in 0..1000 {
+            let run = &order[start[b] as usize..start[b + 1] as usize];
+            assert!(run.iter().all(|&i| keys[i as usize] == b as u32));
         }
     }
 

@@ -17,6 +17,7 @@
 pub mod alloc;
 pub mod anisotropy;
 pub mod band;
+mod blockset;
 pub mod cache;
 pub mod density;
 pub mod eigen3;

@@ -328,7 +328,7 @@ fn surface_volume(
     let (mut grid, extra_inside, signs, info): (WorkGrid, _, _, _) = redistance(dens, iso, band);
     st.redistance = info;
     if o.smooth_iterations > 0 && has_volume {
-        crate::redistance::smooth_band(&mut grid, &|k| signs.inside(k), o.smooth_iterations);
+        crate::redistance::smooth_band(&mut grid, &|o| signs.mask(o), o.smooth_iterations);
     }
     if o.conserve_volume && has_volume {
         st.volume_shift = crate::redistance::conserve_volume(&mut grid, &signs, target, band);

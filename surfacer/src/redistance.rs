@@ -14,7 +14,9 @@
 //! The sign of every voxel comes from f itself, so inside never depends on the propagation.
 use crate::density::{DensityField, SignField};
 use crate::hash::Key;
-use crate::levelset::{leaf_origin, voxel_index, voxel_of, WorkGrid, WorkLeaf, LEAF_SIZE};
+use crate::levelset::{
+    leaf_origin, voxel_index, voxel_of, WorkGrid, WorkLeaf, LEAF_DIM, LEAF_SIZE,
+};
 use crate::{Real, Vec3};
 use rayon::prelude::*;
 
@@ -171,7 +173,10 @@ pub fn redistance(
     let signs = SignField::new(&d, iso);
     drop(d);
     let mask = |o: Key| signs.mask(o);
-    info.flat_gradient = seeds.iter().flatten().filter(|s| s.1).count();
+    info.flat_gradient = seeds
+        .par_iter()
+        .map(|v| v.iter().filter(|s| s.1).count())
+        .sum();
 
     let mut grid = WorkGrid::new(h, bg);
     // one leaf per block with seeds, built in parallel; seed k (in block order) is velocity
@@ -250,36 +255,36 @@ pub fn redistance(
                 if exists.iter().all(|&e| e) {
                     return Vec::new();
                 }
-                for n in 0..LEAF_SIZE {
-                    if fr[n >> 6] >> (n & 63) & 1 == 0 {
-                        continue;
-                    }
-                    let k = voxel_of([0, 0, 0], n);
-                    if k.iter().all(|&c| c > 0 && c < 7) {
-                        continue;
-                    }
-                    let c = l.cp[n];
-                    for dx in -1..=1i32 {
-                        for dy in -1..=1i32 {
-                            for dz in -1..=1i32 {
-                                let d = [dx, dy, dz];
-                                let side = |a: usize| {
-                                    let q = k[a] + d[a];
-                                    if q < 0 {
-                                        0
-                                    } else if q > 7 {
-                                        2
-                                    } else {
-                                        1
+                // front voxels on the leaf's faces, in index order (word x, bit 8y + z)
+                for (x, &w) in fr.iter().enumerate() {
+                    let mut bits = if x == 0 || x == 7 { w } else { w & FACE_YZ };
+                    while bits != 0 {
+                        let n = x * 64 + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let k = voxel_of([0, 0, 0], n);
+                        let c = l.cp[n];
+                        for dx in -1..=1i32 {
+                            for dy in -1..=1i32 {
+                                for dz in -1..=1i32 {
+                                    let d = [dx, dy, dz];
+                                    let side = |a: usize| {
+                                        let q = k[a] + d[a];
+                                        if q < 0 {
+                                            0
+                                        } else if q > 7 {
+                                            2
+                                        } else {
+                                            1
+                                        }
+                                    };
+                                    let sl = side(0) * 9 + side(1) * 3 + side(2);
+                                    if exists[sl] || want[sl] {
+                                        continue;
                                     }
-                                };
-                                let sl = side(0) * 9 + side(1) * 3 + side(2);
-                                if exists[sl] || want[sl] {
-                                    continue;
+                                    let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
+                                    let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
+                                    want[sl] = d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767);
                                 }
-                                let e = [0, 1, 2].map(|a| c[a] as i64 - d[a] as i64 * 4096);
-                                let d2 = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) as Real;
-                                want[sl] = d2 <= lim2 && e.iter().all(|v| v.abs() <= 32767);
                             }
                         }
                     }
@@ -293,24 +298,30 @@ pub fn redistance(
                     .collect::<Vec<Key>>()
             })
             .collect();
-        need.sort_unstable();
+        need.par_sort_unstable();
         need.dedup();
-        for k in need {
-            let before = grid.leaves.len();
-            let li = grid.ensure(k, &mask);
-            if li == before {
-                let mut row = [NONE; 27];
-                for (sl, r) in row.iter_mut().enumerate() {
-                    if let Some(&j) = grid.index.get(&slot_key(k, sl)) {
-                        *r = j as u32;
-                        if j != li {
-                            nbt[j][26 - sl] = li as u32;
-                        }
-                    }
+        // leaves created on the calling thread (see docs/decisions.md), then their neighbour
+        // rows looked up in parallel in the final index, and the links from older leaves set
+        let first_new = grid.leaves.len();
+        for &k in &need {
+            grid.ensure(k, &mask);
+        }
+        let g = &grid;
+        let rows: Vec<[u32; 27]> = (first_new..g.leaves.len())
+            .into_par_iter()
+            .map(|li| {
+                let k = g.leaves[li].origin;
+                std::array::from_fn(|sl| g.index.get(&slot_key(k, sl)).map_or(NONE, |&j| j as u32))
+            })
+            .collect();
+        for (t, row) in rows.iter().enumerate() {
+            for (sl, &j) in row.iter().enumerate() {
+                if j != NONE && (j as usize) < first_new {
+                    nbt[j as usize][26 - sl] = (first_new + t) as u32;
                 }
-                nbt.push(row);
             }
         }
+        nbt.extend(rows);
         front.resize(grid.leaves.len(), [0; 8]);
         // leaves that may receive new values: those with or next to front voxels
         let g = &grid;
@@ -347,68 +358,72 @@ pub fn redistance(
                 let dil = dilate26(&front_of);
                 let mut out = Vec::new();
                 let mut sign: Option<[u64; 8]> = None;
-                for n in 0..LEAF_SIZE {
-                    if dil[n >> 6] >> (n & 63) & 1 == 0 || leaf.is_set(n) {
-                        continue;
-                    }
-                    let k = voxel_of([0, 0, 0], n);
-                    // nearest closest point among the set neighbours, in voxel units
-                    let mut best = (i64::MAX, [0i16; 3], 0u32);
-                    let mut consider = |lj: &WorkLeaf, m: usize, d: [i32; 3]| {
-                        let c = lj.cp[m];
-                        let e = [0, 1, 2].map(|a| c[a] as i64 + d[a] as i64 * 4096);
-                        let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-                        if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
-                            best = (d2, e.map(|v| v as i16), lj.src[m]);
-                        }
-                    };
-                    if k.iter().all(|&c| c > 0 && c < 7) {
-                        // all 26 neighbours in this leaf, and only the front ones can win: a
-                        // voxel set before the previous layer had this candidate as a candidate
-                        // once (or its leaf was not needed) and was then farther than the limit,
-                        // so it cannot give a distance within the limit now. The front bits
-                        // around the voxel, 3 rows of 3 per x-word, in (dx, dy, dz) order
-                        let sh = 8 * (k[1] - 1) + (k[2] - 1);
-                        for dx in -1..=1 {
-                            let mut bits = (fr[li][(k[0] + dx) as usize] >> sh) & 0x07_0707;
-                            while bits != 0 {
-                                let b = bits.trailing_zeros() as i32;
-                                bits &= bits - 1;
-                                let (dy, dz) = (b / 8 - 1, b % 8 - 1);
-                                let m = (n as i32 + dx * 64 + dy * 8 + dz) as usize;
-                                consider(leaf, m, [dx, dy, dz]);
+                // candidates in index order (word x, bit 8y + z)
+                for x in 0..LEAF_DIM as usize {
+                    let mut cand = dil[x] & !leaf.set[x];
+                    while cand != 0 {
+                        let n = x * 64 + cand.trailing_zeros() as usize;
+                        cand &= cand - 1;
+                        let k = voxel_of([0, 0, 0], n);
+                        // nearest closest point among the set neighbours, in voxel units
+                        let mut best = (i64::MAX, [0i16; 3], 0u32);
+                        let mut consider = |lj: &WorkLeaf, m: usize, d: [i32; 3]| {
+                            let c = lj.cp[m];
+                            let e = [0, 1, 2].map(|a| c[a] as i64 + d[a] as i64 * 4096);
+                            let d2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+                            if d2 < best.0 && e.iter().all(|v| v.abs() <= 32767) {
+                                best = (d2, e.map(|v| v as i16), lj.src[m]);
                             }
-                        }
-                    } else {
-                        for dx in -1..=1 {
-                            for dy in -1..=1 {
-                                for dz in -1..=1 {
-                                    let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz]) else {
-                                        continue;
-                                    };
-                                    // only front neighbours can win (as above)
-                                    if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
-                                        consider(&g.leaves[j], m, [dx, dy, dz]);
+                        };
+                        if k.iter().all(|&c| c > 0 && c < 7) {
+                            // all 26 neighbours in this leaf, and only the front ones can win: a
+                            // voxel set before the previous layer had this candidate as a candidate
+                            // once (or its leaf was not needed) and was then farther than the limit,
+                            // so it cannot give a distance within the limit now. The front bits
+                            // around the voxel, 3 rows of 3 per x-word, in (dx, dy, dz) order
+                            let sh = 8 * (k[1] - 1) + (k[2] - 1);
+                            for dx in -1..=1 {
+                                let mut bits = (fr[li][(k[0] + dx) as usize] >> sh) & 0x07_0707;
+                                while bits != 0 {
+                                    let b = bits.trailing_zeros() as i32;
+                                    bits &= bits - 1;
+                                    let (dy, dz) = (b / 8 - 1, b % 8 - 1);
+                                    let m = (n as i32 + dx * 64 + dy * 8 + dz) as usize;
+                                    consider(leaf, m, [dx, dy, dz]);
+                                }
+                            }
+                        } else {
+                            for dx in -1..=1 {
+                                for dy in -1..=1 {
+                                    for dz in -1..=1 {
+                                        let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz])
+                                        else {
+                                            continue;
+                                        };
+                                        // only front neighbours can win (as above)
+                                        if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
+                                            consider(&g.leaves[j], m, [dx, dy, dz]);
+                                        }
                                     }
                                 }
                             }
                         }
+                        if best.0 == i64::MAX {
+                            continue;
+                        }
+                        let dist = (best.0 as Real).sqrt() * CP_UNIT * h;
+                        if dist > limit {
+                            continue;
+                        }
+                        // the signs of this leaf's voxels (what `inside` gives), looked up once
+                        let sg = *sign.get_or_insert_with(|| mask(o));
+                        let s = if sg[n >> 6] >> (n & 63) & 1 == 1 {
+                            -1.0
+                        } else {
+                            1.0
+                        };
+                        out.push((n, (s * dist) as f32, best.1, best.2));
                     }
-                    if best.0 == i64::MAX {
-                        continue;
-                    }
-                    let dist = (best.0 as Real).sqrt() * CP_UNIT * h;
-                    if dist > limit {
-                        continue;
-                    }
-                    // the signs of this leaf's voxels (what `inside` gives), looked up once
-                    let sg = *sign.get_or_insert_with(|| mask(o));
-                    let s = if sg[n >> 6] >> (n & 63) & 1 == 1 {
-                        -1.0
-                    } else {
-                        1.0
-                    };
-                    out.push((n, (s * dist) as f32, best.1, best.2));
                 }
                 (!out.is_empty()).then_some((li, out))
             })
@@ -416,20 +431,37 @@ pub fn redistance(
         if updates.is_empty() {
             break;
         }
-        for f in front.iter_mut() {
-            *f = [0; 8];
+        // applied leaf by leaf in parallel (each list belongs to one leaf; the lists are freed
+        // by the workers that built them)
+        info.propagated += updates.iter().map(|u| u.1.len()).sum::<usize>();
+        let mut slot = vec![u32::MAX; grid.leaves.len()];
+        for (k, u) in updates.iter().enumerate() {
+            slot[u.0] = k as u32;
         }
-        for (li, list) in updates {
-            let l = &mut grid.leaves[li];
-            for (n, phi, cp, from) in list {
-                l.phi[n] = phi;
-                l.cp[n] = cp;
-                l.src[n] = from;
-                l.set[n >> 6] |= 1 << (n & 63);
-                front[li][n >> 6] |= 1 << (n & 63);
-                info.propagated += 1;
-            }
-        }
+        let mut lists: Vec<Option<Vec<Update>>> = updates.into_iter().map(|u| Some(u.1)).collect();
+        let lists_at = ListSlots(lists.as_mut_ptr());
+        grid.leaves
+            .par_iter_mut()
+            .zip(front.par_iter_mut())
+            .zip(slot.par_iter())
+            .for_each(|((l, fr), &k)| {
+                *fr = [0; 8];
+                if k == u32::MAX {
+                    return;
+                }
+                let lists_at = &lists_at;
+                // SAFETY: `slot` maps distinct leaves to distinct lists, so each list is taken
+                // by exactly one leaf
+                let list = unsafe { (*lists_at.0.add(k as usize)).take() }.unwrap_or_default();
+                for (n, phi, cp, from) in list {
+                    l.phi[n] = phi;
+                    l.cp[n] = cp;
+                    l.src[n] = from;
+                    l.set[n >> 6] |= 1 << (n & 63);
+                    fr[n >> 6] |= 1 << (n & 63);
+                }
+            });
+        drop(lists);
     }
     // leaves the band never reached hold only ±background, which the signs give anyway; the
     // closest points are no longer needed (3 of the 7 kB per leaf)
@@ -463,10 +495,17 @@ pub fn redistance(
     (grid, extra_inside, signs, info)
 }
 
+/// The per-leaf update lists of a layer, taken by the leaves in parallel.
+struct ListSlots(*mut Option<Vec<Update>>);
+// SAFETY: each list is taken by exactly one leaf (see its use in `redistance`)
+unsafe impl Sync for ListSlots {}
+
 /// No neighbour leaf in a slot of the neighbour table.
 const NONE: u32 = u32::MAX;
 
 const Z0: u64 = 0x0101_0101_0101_0101;
+/// Bits of an x-word on the y or z faces of a leaf (y = 0, y = 7, z = 0, z = 7).
+const FACE_YZ: u64 = 0xFF | (0xFF << 56) | Z0 | Z7;
 const Z7: u64 = 0x8080_8080_8080_8080;
 
 /// Dilates a leaf's voxel mask by one voxel in all 26 directions, including the contributions of

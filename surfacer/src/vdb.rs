@@ -78,8 +78,22 @@ impl Out {
     }
     fn values(&mut self, raw: &[u8]) {
         self.u8(ALL_VALUES);
-        self.zipped(raw, &mut Compress::new(Compression::fast(), true));
+        with_compressor(|c| self.zipped(raw, c));
     }
+}
+
+/// Calls `f` with this thread's zlib compressor (level 1), created on first use and kept: a new
+/// one allocates and clears a few hundred kB, and the writer compresses ~20 k buffers per file.
+/// [`zlib`] resets it before each stream, so the output does not depend on what it compressed
+/// before.
+fn with_compressor<R>(f: impl FnOnce(&mut Compress) -> R) -> R {
+    thread_local! {
+        static ZIP: std::cell::RefCell<Option<Compress>> = const { std::cell::RefCell::new(None) };
+    }
+    ZIP.with(|z| {
+        let mut z = z.borrow_mut();
+        f(z.get_or_insert_with(|| Compress::new(Compression::fast(), true)))
+    })
 }
 
 /// zlib stream of `raw` (None: the compressor failed or the result is not smaller).
@@ -242,68 +256,24 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
             }
         }
     }
-    // buffers, same order
+    // buffers, same order: all leaves in tree order, encoded in parallel in chunks (few
+    // fork-joins, bounded memory) and appended in order
     let block_pos = o.0.len();
+    let mut order: Vec<usize> = Vec::with_capacity(ls.leaves.len());
     for n1s in tree.values() {
         for (leaves, _) in n1s.values() {
-            let mut ls_sorted = leaves.clone();
-            ls_sorted.sort_by_key(|&l| n1_index(ls.leaves[l].origin));
-            // leaf buffers encoded in parallel, appended in order
-            let bufs: Vec<Vec<u8>> = ls_sorted
-                .par_iter()
-                .map_init(
-                    || Compress::new(Compression::fast(), true),
-                    |c, &l| {
-                        let leaf = &ls.leaves[l];
-                        let mut b = Out(Vec::new());
-                        b.mask(&leaf.active);
-                        let on = |n: usize| leaf.active[n >> 6] >> (n & 63) & 1 == 1;
-                        // OpenVDB's mask compression (what it writes for level sets itself): only the
-                        // active values, the inactive ones being ±background (a selection mask says
-                        // which) for φ and background (0) for the velocity
-                        let raw = match kind {
-                            Kind::Surface => {
-                                let (mut plus, mut minus, mut other) = (false, false, false);
-                                let mut sel = [0u64; 8];
-                                for n in (0..512).filter(|&n| !on(n)) {
-                                    let v = leaf.phi[n];
-                                    if v == bg {
-                                        plus = true;
-                                        sel[n >> 6] |= 1 << (n & 63);
-                                    } else if v == -bg {
-                                        minus = true;
-                                    } else {
-                                        other = true;
-                                    }
-                                }
-                                if other {
-                                    b.u8(ALL_VALUES);
-                                    b.zipped(&f32_bytes(leaf.phi.iter().copied()), c);
-                                    return b.0;
-                                }
-                                if plus && minus {
-                                    b.u8(MASK_AND_NO_INACTIVE_VALS);
-                                    b.mask(&sel);
-                                } else if minus {
-                                    b.u8(NO_MASK_AND_MINUS_BG);
-                                } else {
-                                    b.u8(NO_MASK_OR_INACTIVE_VALS);
-                                }
-                                f32_bytes((0..512).filter(|&n| on(n)).map(|n| leaf.phi[n]))
-                            }
-                            Kind::Velocity => {
-                                b.u8(NO_MASK_OR_INACTIVE_VALS);
-                                f32_bytes((0..512).filter_map(|n| leaf.vel_at(n)).flatten())
-                            }
-                        };
-                        b.zipped(&raw, c);
-                        b.0
-                    },
-                )
-                .collect();
-            for b in bufs {
-                o.0.extend_from_slice(&b);
-            }
+            let start = order.len();
+            order.extend_from_slice(leaves);
+            order[start..].sort_by_key(|&l| n1_index(ls.leaves[l].origin));
+        }
+    }
+    for chunk in order.chunks(4096) {
+        let bufs: Vec<Vec<u8>> = chunk
+            .par_iter()
+            .map(|&l| with_compressor(|c| leaf_buffer(&ls.leaves[l], kind, bg, c)))
+            .collect();
+        for b in bufs {
+            o.0.extend_from_slice(&b);
         }
     }
     let end_pos = o.0.len();
@@ -312,6 +282,52 @@ fn write_grid(o: &mut Out, ls: &LevelSet, tree: &Tree, kind: Kind) {
         o.0[at..at + 8].copy_from_slice(&(v as i64).to_le_bytes());
         at += 8;
     }
+}
+
+/// One leaf's buffer: its active mask, then its values with OpenVDB's mask compression (what it
+/// writes for level sets itself): only the active values, the inactive ones being ±background (a
+/// selection mask says which) for φ and background (0) for the velocity.
+fn leaf_buffer(leaf: &crate::levelset::Leaf, kind: Kind, bg: f32, c: &mut Compress) -> Vec<u8> {
+    let mut b = Out(Vec::new());
+    b.mask(&leaf.active);
+    let on = |n: usize| leaf.active[n >> 6] >> (n & 63) & 1 == 1;
+    let raw = match kind {
+        Kind::Surface => {
+            let (mut plus, mut minus, mut other) = (false, false, false);
+            let mut sel = [0u64; 8];
+            for n in (0..512).filter(|&n| !on(n)) {
+                let v = leaf.phi[n];
+                if v == bg {
+                    plus = true;
+                    sel[n >> 6] |= 1 << (n & 63);
+                } else if v == -bg {
+                    minus = true;
+                } else {
+                    other = true;
+                }
+            }
+            if other {
+                b.u8(ALL_VALUES);
+                b.zipped(&f32_bytes(leaf.phi.iter().copied()), c);
+                return b.0;
+            }
+            if plus && minus {
+                b.u8(MASK_AND_NO_INACTIVE_VALS);
+                b.mask(&sel);
+            } else if minus {
+                b.u8(NO_MASK_AND_MINUS_BG);
+            } else {
+                b.u8(NO_MASK_OR_INACTIVE_VALS);
+            }
+            f32_bytes((0..512).filter(|&n| on(n)).map(|n| leaf.phi[n]))
+        }
+        Kind::Velocity => {
+            b.u8(NO_MASK_OR_INACTIVE_VALS);
+            f32_bytes((0..512).filter_map(|n| leaf.vel_at(n)).flatten())
+        }
+    };
+    b.zipped(&raw, c);
+    b.0
 }
 
 /// Encodes the level set and its velocity as a VDB file in memory.

@@ -223,5 +223,5 @@ pub fn marching_cubes(ls: &LevelSet) -> TriMesh {
             },
         )
         .collect();
-    merge_blocks(parts)
+    merge_blocks(&blocks, parts)
 }

@@ -16,7 +16,9 @@ use crate::{Real, Vec3};
 use rayon::prelude::*;
 
 mod cubes;
+mod merge;
 pub use cubes::marching_cubes;
+use merge::merge_blocks;
 
 /// An indexed triangle mesh with per-vertex normals and velocities.
 #[derive(Debug, Clone, Default)]
@@ -130,25 +132,10 @@ impl TriMesh {
             .count()
     }
 
-    /// Recomputes vertex normals as normalised sums of area-weighted triangle normals.
+    /// Recomputes vertex normals as normalised sums of area-weighted triangle normals (summed in
+    /// triangle order; parallel, same result for any thread count).
     pub fn compute_normals(&mut self) {
-        let mut n = vec![Vec3::zeros(); self.pos.len()];
-        for t in &self.tris {
-            let (a, b, c) = (
-                self.pos[t[0] as usize],
-                self.pos[t[1] as usize],
-                self.pos[t[2] as usize],
-            );
-            let fnrm = (b - a).cross(&(c - a));
-            for &v in t {
-                n[v as usize] += fnrm;
-            }
-        }
-        for v in n.iter_mut() {
-            let l = v.norm();
-            *v = if l > 0.0 { *v / l } else { Vec3::z() };
-        }
-        self.normal = n;
+        self.normal = merge::vertex_normals(self);
     }
 }
 
@@ -408,58 +395,7 @@ pub fn marching_tets(ls: &LevelSet) -> TriMesh {
             (verts, tris)
         })
         .collect();
-    merge_blocks(parts)
-}
-
-/// Merges the per-block meshes: vertices shared between blocks (same edge key) become one; blocks
-/// are consumed as they are copied. Normals are computed at the end.
-fn merge_blocks(parts: Vec<BlockMesh>) -> TriMesh {
-    // merge vertices shared between blocks by edge key; blocks are consumed as they are copied
-    let nv: usize = parts.iter().map(|p| p.0.len()).sum();
-    let nt: usize = parts.iter().map(|p| p.1.len()).sum();
-    let mut flat_pos = Vec::with_capacity(nv);
-    let mut flat_vel = Vec::with_capacity(nv);
-    let mut keys: Vec<(u64, u32)> = Vec::with_capacity(nv);
-    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(nt);
-    for (v, t) in parts {
-        let off = flat_pos.len() as u32;
-        for (k, p, u) in v {
-            keys.push((k, flat_pos.len() as u32));
-            flat_pos.push(p);
-            flat_vel.push(u);
-        }
-        tris.extend(t.iter().map(|t| t.map(|i| i + off)));
-    }
-    crate::alloc::trim();
-    keys.par_sort_unstable();
-    let mut remap = vec![0u32; nv];
-    let mut pos = Vec::new();
-    let mut vel = Vec::new();
-    let mut s = 0;
-    while s < keys.len() {
-        let id = pos.len() as u32;
-        let (p, u): ([f32; 3], [f32; 3]) =
-            (flat_pos[keys[s].1 as usize], flat_vel[keys[s].1 as usize]);
-        pos.push(Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real));
-        vel.push(Vec3::new(u[0] as Real, u[1] as Real, u[2] as Real));
-        let mut e = s;
-        while e < keys.len() && keys[e].0 == keys[s].0 {
-            remap[keys[e].1 as usize] = id;
-            e += 1;
-        }
-        s = e;
-    }
-    drop((keys, flat_pos, flat_vel));
-    tris.par_iter_mut()
-        .for_each(|t| *t = t.map(|i| remap[i as usize]));
-    let mut mesh = TriMesh {
-        pos,
-        vel,
-        normal: Vec::new(),
-        tris,
-    };
-    mesh.compute_normals();
-    mesh
+    merge_blocks(&blocks, parts)
 }
 
 #[cfg(test)]
