@@ -27,7 +27,8 @@ use crate::linsolve::{bicgstab, BicgstabParams, Csr, Ilu0, SolveError, SolveInfo
 use crate::math::{Mat3, Real, Vec3};
 use crate::particles::Codim;
 use crate::transition::cone_census;
-use faer::sparse::{SparseRowMat, SparseRowMatRef, Triplet};
+use faer::sparse::{SparseRowMat, SparseRowMatRef};
+use rayon::prelude::*;
 
 /// Role of a filament particle for the explicit tension terms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -195,21 +196,54 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
     let l = Csr::from_faer(sys.laplacian)?;
     let n = l.nrows;
     let c = sys.sigma * sys.dt * sys.dt;
-    let mut t = Vec::with_capacity(l.val.len() + n);
+    // built row by row in CSR (L's columns are sorted; the diagonal goes in
+    // its place): the same values as summing triplets, without the sort
+    let mut row_ptr = Vec::with_capacity(n + 1);
+    let mut col = Vec::with_capacity(l.val.len() + n);
+    let mut val = Vec::with_capacity(l.val.len() + n);
+    row_ptr.push(0);
     for i in 0..n {
         if sys.fixed[i] {
-            t.push(Triplet::new(i, i, 1.0));
+            col.push(i);
+            val.push(1.0);
+            row_ptr.push(col.len());
             continue;
         }
-        let d = sys.drag.get(i).map_or(0.0, |d| sys.dt * d / sys.mass[i]);
-        t.push(Triplet::new(i, i, 1.0 + d));
+        let d = 1.0 + sys.drag.get(i).map_or(0.0, |d| sys.dt * d / sys.mass[i]);
         let ci = c * sys.area[i] / sys.mass[i] + sys.nu * sys.dt;
+        let mut diag_done = false;
         for k in l.row_ptr[i]..l.row_ptr[i + 1] {
-            t.push(Triplet::new(i, l.col[k], -ci * l.val[k]));
+            let j = l.col[k];
+            if k > l.row_ptr[i] && l.col[k - 1] >= j {
+                return Err(SolveError::Dimension(format!(
+                    "Laplacian row {i}: columns not sorted"
+                )));
+            }
+            if !diag_done && j > i {
+                col.push(i);
+                val.push(d);
+                diag_done = true;
+            }
+            if j == i {
+                col.push(i);
+                val.push(d - ci * l.val[k]);
+                diag_done = true;
+            } else {
+                col.push(j);
+                val.push(-ci * l.val[k]);
+            }
         }
+        if !diag_done {
+            col.push(i);
+            val.push(d);
+        }
+        row_ptr.push(col.len());
     }
-    SparseRowMat::try_new_from_triplets(n, n, &t)
-        .map_err(|e| SolveError::Dimension(format!("{e:?}")))
+    if col.iter().any(|&j| j >= n) {
+        return Err(SolveError::Dimension("Laplacian column out of range".into()));
+    }
+    let sym = faer::sparse::SymbolicSparseRowMat::new_checked(n, n, row_ptr, None, col);
+    Ok(SparseRowMat::new(sym, val))
 }
 
 /// Solves eq. (16)/(17) for u^{n+1}, component by component with one
@@ -220,28 +254,35 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
     let a = Csr::from_faer(a_mat.as_ref())?;
     let l = Csr::from_faer(sys.laplacian)?;
     let ilu = Ilu0::new(&a)?;
+    // the three components share the matrix and its factors and are solved
+    // side by side (each solve is sequential, so the result does not
+    // depend on the thread count)
+    let comps: Vec<(Vec<Real>, SolveInfo)> = (0..3)
+        .into_par_iter()
+        .map(|d| {
+            let xc: Vec<Real> = sys.x.iter().map(|x| x[d]).collect();
+            let mut lx = vec![0.0; n];
+            l.matvec(&xc, &mut lx);
+            let b: Vec<Real> = (0..n)
+                .map(|i| {
+                    if sys.fixed[i] {
+                        sys.u[i][d]
+                    } else {
+                        (sys.sigma * sys.dt * sys.area[i] * lx[i] + sys.dt * sys.f_explicit[i][d])
+                            / sys.mass[i]
+                            + sys.u[i][d]
+                    }
+                })
+                .collect();
+            let mut sol: Vec<Real> = sys.u.iter().map(|v| v[d]).collect();
+            let info = bicgstab(&a, &b, &mut sol, &ilu, prm)?;
+            Ok((sol, info))
+        })
+        .collect::<Result<_, SolveError>>()?;
     let mut u = vec![Vec3::zeros(); n];
     let mut info = [SolveInfo::default(); 3];
-    let mut xc = vec![0.0; n];
-    let mut lx = vec![0.0; n];
-    for d in 0..3 {
-        for i in 0..n {
-            xc[i] = sys.x[i][d];
-        }
-        l.matvec(&xc, &mut lx);
-        let b: Vec<Real> = (0..n)
-            .map(|i| {
-                if sys.fixed[i] {
-                    sys.u[i][d]
-                } else {
-                    (sys.sigma * sys.dt * sys.area[i] * lx[i] + sys.dt * sys.f_explicit[i][d])
-                        / sys.mass[i]
-                        + sys.u[i][d]
-                }
-            })
-            .collect();
-        let mut sol: Vec<Real> = sys.u.iter().map(|v| v[d]).collect();
-        info[d] = bicgstab(&a, &b, &mut sol, &ilu, prm)?;
+    for (d, (sol, si)) in comps.into_iter().enumerate() {
+        info[d] = si;
         for i in 0..n {
             u[i][d] = sol[i];
         }
@@ -252,6 +293,7 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::sparse::Triplet;
     use crate::neighbors::neighbor_lists;
 
     /// Three-point Laplacian of a uniformly sampled closed curve (ring of n

@@ -143,9 +143,11 @@ pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, ban
             .filter(|b| !grid.index.contains_key(*b))
             .count() as Real
             * LEAF_SIZE as Real;
-    // V(s), A(s) of the shifted field φ + s
+    // V(s), A(s) of the shifted field φ + s; per-leaf sums in parallel,
+    // added in leaf order (a rayon `reduce` adds in an order that depends
+    // on work stealing, so its last bits could change from run to run)
     let eval = |s: Real| {
-        let (v, a) = grid
+        let per_leaf: Vec<(Real, Real)> = grid
             .leaves
             .par_iter()
             .map(|l| {
@@ -158,7 +160,10 @@ pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, ban
                 }
                 (v, a)
             })
-            .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+            .collect();
+        let (v, a) = per_leaf
+            .iter()
+            .fold((0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
         ((v + interior) * h3, a * h3)
     };
     // Newton iterations on V(s) = V_p (V decreases with s at rate A)
