@@ -147,7 +147,13 @@ pub fn filament_length(xp: &Vec3, nbrs: impl Iterator<Item = Vec3>, fallback: Re
 /// a band of k rows as k particles per spacing, so the rim's force per
 /// length stays 2σ. On a regular single row of spacing s the kernel sum is
 /// 1/s within 0.8 % for w ≥ 2s (0.2 % for w ≥ 3s).
-pub fn rim_length(xp: &Vec3, t: &Vec3, nbrs: impl Iterator<Item = Vec3>, w: Real, cap: Real) -> Real {
+pub fn rim_length(
+    xp: &Vec3,
+    t: &Vec3,
+    nbrs: impl Iterator<Item = Vec3>,
+    w: Real,
+    cap: Real,
+) -> Real {
     let k = 35.0 / (32.0 * w);
     let mut density = k;
     for q in nbrs {
@@ -225,7 +231,10 @@ mod tests {
             }
             let l = rim_length(&Vec3::zeros(), &t, nb.into_iter(), 3.0 * s, 10.0 * s);
             let want = s / rows as Real;
-            assert!((l - want).abs() < 0.02 * want, "rows {rows} phase {phase}: {l} vs {want}");
+            assert!(
+                (l - want).abs() < 0.02 * want,
+                "rows {rows} phase {phase}: {l} vs {want}"
+            );
         }
     }
 

@@ -23,7 +23,9 @@
 //! Fixed particles (Appendix C rings) keep their prescribed velocity: their
 //! rows are replaced by the identity.
 
-use crate::linsolve::{bicgstab, BicgstabParams, Csr, Ilu0, SolveError, SolveInfo};
+use crate::linsolve::{
+    bicgstab, diag_plus_scaled_rows, BicgstabParams, Csr, Ilu0, SolveError, SolveInfo,
+};
 use crate::math::{Mat3, Real, Vec3};
 use crate::particles::Codim;
 use crate::transition::cone_census;
@@ -193,57 +195,36 @@ pub struct TensionSolution {
 /// are on one scale (identity rows for fixed particles); D is the implicit
 /// drag (zero unless `drag` is given), ν the implicit viscosity (eq. 13).
 pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveError> {
-    let l = Csr::from_faer(sys.laplacian)?;
-    let n = l.nrows;
+    let n = sys.laplacian.nrows();
+    if sys.laplacian.ncols() != n || [sys.mass.len(), sys.area.len(), sys.fixed.len()] != [n; 3] {
+        return Err(SolveError::Dimension(format!(
+            "tension system: Laplacian {}×{}, {} masses, {} areas, {} fixed flags",
+            n,
+            sys.laplacian.ncols(),
+            sys.mass.len(),
+            sys.area.len(),
+            sys.fixed.len()
+        )));
+    }
     let c = sys.sigma * sys.dt * sys.dt;
-    // built row by row in CSR (L's columns are sorted; the diagonal goes in
-    // its place): the same values as summing triplets, without the sort
-    let mut row_ptr = Vec::with_capacity(n + 1);
-    let mut col = Vec::with_capacity(l.val.len() + n);
-    let mut val = Vec::with_capacity(l.val.len() + n);
-    row_ptr.push(0);
-    for i in 0..n {
-        if sys.fixed[i] {
-            col.push(i);
-            val.push(1.0);
-            row_ptr.push(col.len());
-            continue;
-        }
-        let d = 1.0 + sys.drag.get(i).map_or(0.0, |d| sys.dt * d / sys.mass[i]);
-        let ci = c * sys.area[i] / sys.mass[i] + sys.nu * sys.dt;
-        let mut diag_done = false;
-        for k in l.row_ptr[i]..l.row_ptr[i + 1] {
-            let j = l.col[k];
-            if k > l.row_ptr[i] && l.col[k - 1] >= j {
-                return Err(SolveError::Dimension(format!(
-                    "Laplacian row {i}: columns not sorted"
-                )));
-            }
-            if !diag_done && j > i {
-                col.push(i);
-                val.push(d);
-                diag_done = true;
-            }
-            if j == i {
-                col.push(i);
-                val.push(d - ci * l.val[k]);
-                diag_done = true;
+    // a fixed row keeps only its diagonal 1 (its Laplacian entries scaled to 0)
+    Ok(diag_plus_scaled_rows(
+        sys.laplacian,
+        |i| {
+            if sys.fixed[i] {
+                1.0
             } else {
-                col.push(j);
-                val.push(-ci * l.val[k]);
+                1.0 + sys.drag.get(i).map_or(0.0, |d| sys.dt * d / sys.mass[i])
             }
-        }
-        if !diag_done {
-            col.push(i);
-            val.push(d);
-        }
-        row_ptr.push(col.len());
-    }
-    if col.iter().any(|&j| j >= n) {
-        return Err(SolveError::Dimension("Laplacian column out of range".into()));
-    }
-    let sym = faer::sparse::SymbolicSparseRowMat::new_checked(n, n, row_ptr, None, col);
-    Ok(SparseRowMat::new(sym, val))
+        },
+        |i| {
+            if sys.fixed[i] {
+                0.0
+            } else {
+                -(c * sys.area[i] / sys.mass[i] + sys.nu * sys.dt)
+            }
+        },
+    ))
 }
 
 /// Solves eq. (16)/(17) for u^{n+1}, component by component with one
@@ -293,8 +274,8 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
 #[cfg(test)]
 mod tests {
     use super::*;
-    use faer::sparse::Triplet;
     use crate::neighbors::neighbor_lists;
+    use faer::sparse::Triplet;
 
     /// Three-point Laplacian of a uniformly sampled closed curve (ring of n
     /// particles, radius R): (x_{i−1} − 2x_i + x_{i+1}) / s², with s the chord.

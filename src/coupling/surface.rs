@@ -11,8 +11,8 @@
 //! (a waterbell's or a polygon's sheet) and has two faces (Appendix D).
 
 use crate::area::{
-    filament_areas, filament_length, filament_radius, rim_length, sheet_half_thickness, sphere_radius,
-    surface_tension_area, voronoi_area,
+    filament_areas, filament_length, filament_radius, rim_length, sheet_half_thickness,
+    sphere_radius, surface_tension_area, voronoi_area,
 };
 use crate::math::{Real, Vec3};
 use crate::mls::operators::{par_frames, Neighborhoods};

@@ -91,6 +91,17 @@ pub fn identity_plus(
     alpha: f64,
     beta: f64,
 ) -> faer::sparse::SparseRowMat<usize, f64> {
+    diag_plus_scaled_rows(a.as_ref(), |_| alpha, |_| beta)
+}
+
+/// The CSR matrix whose row i is α_i e_iᵀ + β_i (row i of A) (A square,
+/// columns sorted per row); the diagonal is inserted where A does not
+/// store it.
+pub fn diag_plus_scaled_rows(
+    a: faer::sparse::SparseRowMatRef<'_, usize, f64>,
+    alpha: impl Fn(usize) -> f64,
+    beta: impl Fn(usize) -> f64,
+) -> faer::sparse::SparseRowMat<usize, f64> {
     let n = a.nrows();
     let rp = a.symbolic().row_ptr();
     let ci = a.symbolic().col_idx();
@@ -100,6 +111,7 @@ pub fn identity_plus(
     let mut val = Vec::with_capacity(v.len() + n);
     row_ptr.push(0);
     for i in 0..n {
+        let (alpha, beta) = (alpha(i), beta(i));
         let mut diag_done = false;
         for k in rp[i]..rp[i + 1] {
             if !diag_done && ci[k] > i {
