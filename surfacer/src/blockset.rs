@@ -1,7 +1,7 @@
 //! Sets of 8³ blocks for the density pass: the union of many kernels' block boxes, block
 //! origin → index tables, and the grouping of (block, kernel) pairs by block. Each is parallel and
 //! gives the same result for any thread count.
-use crate::hash::{FxMap, Key};
+use crate::hash::{chunk_starts, FxMap, Key};
 use crate::levelset::LEAF_DIM;
 use rayon::prelude::*;
 
@@ -189,16 +189,7 @@ pub(crate) fn group_by_block(
             m
         })
         .collect();
-    let mut start = vec![0usize; blocks + 1];
-    for b in 0..blocks {
-        let mut s = start[b];
-        for c in at.iter_mut() {
-            let m = c[b];
-            c[b] = s;
-            s += m;
-        }
-        start[b + 1] = s;
-    }
+    let start = chunk_starts(&mut at, blocks);
     let total = start[blocks];
     let mut list: Vec<u32> = Vec::with_capacity(total);
     struct Slots(*mut u32);

@@ -257,6 +257,26 @@ fn floor_i(x: Real) -> i32 {
 /// each key's run, with a final end; the indices). Parallel over chunks of the keys, each chunk
 /// writing its own disjoint slots: the result is the serial sort's for any thread count. Chunks
 /// keep one count per bucket each, so only one is used when there are more buckets than keys.
+/// Turns the per-chunk bucket counts of a parallel counting sort into each
+/// chunk's first slot per bucket (buckets in order, chunks in order within a
+/// bucket) and returns the buckets' first slots (`buckets + 1` entries).
+pub(crate) fn chunk_starts<T>(at: &mut [Vec<T>], buckets: usize) -> Vec<T>
+where
+    T: Copy + Default + std::ops::Add<Output = T>,
+{
+    let mut start = vec![T::default(); buckets + 1];
+    for b in 0..buckets {
+        let mut s = start[b];
+        for c in at.iter_mut() {
+            let m = c[b];
+            c[b] = s;
+            s = s + m;
+        }
+        start[b + 1] = s;
+    }
+    start
+}
+
 pub fn counting_sort(keys: &[u32], buckets: usize) -> (Vec<u32>, Vec<u32>) {
     let n = keys.len();
     let chunks = if buckets <= n {
@@ -275,16 +295,7 @@ pub fn counting_sort(keys: &[u32], buckets: usize) -> (Vec<u32>, Vec<u32>) {
             m
         })
         .collect();
-    let mut start = vec![0u32; buckets + 1];
-    for b in 0..buckets {
-        let mut s = start[b];
-        for c in at.iter_mut() {
-            let m = c[b];
-            c[b] = s;
-            s += m;
-        }
-        start[b + 1] = s;
-    }
+    let start = chunk_starts(&mut at, buckets);
     let mut order: Vec<u32> = Vec::with_capacity(n);
     struct Slots(*mut u32);
     // SAFETY (Sync): chunks write disjoint slots (below)
