@@ -179,6 +179,43 @@ pub struct TensionSystem<'a> {
     pub sigma: Real,
     /// Time step Δt (s).
     pub dt: Real,
+    /// Which part of ∇²x^n enters the right-hand side.
+    pub curvature: CurvaturePart<'a>,
+}
+
+/// Which part of the curvature vector ∇²x^n = (L x^n)_i drives the
+/// explicit side of eq. (16).
+#[derive(Clone, Copy, Debug)]
+pub enum CurvaturePart<'a> {
+    /// All of it.
+    Full,
+    /// Its normal part only ([`normal_part`]): frame axes per joint
+    /// particle; the first `n_sheet` are sheets.
+    Normal {
+        /// Frame axes (b¹, b², b³) per particle.
+        axes: &'a [Mat3],
+        /// Number of sheet particles (the first joint indices).
+        n_sheet: usize,
+    },
+}
+
+/// The normal part of a curvature vector ∇²x: a sheet keeps its b³
+/// component, a filament loses its b¹ component. Analytically κn is normal;
+/// on an irregular sampling, or next to a boundary ring where the
+/// neighbourhood is one-sided, the MLS row has an O(h^k) tangential error
+/// which, left in the explicit tension, drives the particles along the
+/// surface and feeds on the irregularity it creates (resting droplet:
+/// tangential sheet speed doubling every ~30 ms; full-resolution catenoid:
+/// the rows next to the rings pulled away from them until the film tore,
+/// `docs/decisions.md`).
+pub fn normal_part(axes: &Mat3, sheet: bool, lx: &Vec3) -> Vec3 {
+    if sheet {
+        let n: Vec3 = axes.column(2).into();
+        n * n.dot(lx)
+    } else {
+        let t: Vec3 = axes.column(0).into();
+        lx - t * t.dot(lx)
+    }
 }
 
 /// Result of the semi-implicit tension solve.
@@ -235,21 +272,38 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
     let a = Csr::from_faer(a_mat.as_ref())?;
     let l = Csr::from_faer(sys.laplacian)?;
     let ilu = Ilu0::new(&a)?;
+    // ∇²x^n per particle (three products), then its normal part if asked
+    let lx_c: Vec<Vec<Real>> = (0..3)
+        .into_par_iter()
+        .map(|d| {
+            let xc: Vec<Real> = sys.x.iter().map(|x| x[d]).collect();
+            let mut lx = vec![0.0; n];
+            l.matvec(&xc, &mut lx);
+            lx
+        })
+        .collect();
+    let lx: Vec<Vec3> = (0..n)
+        .map(|i| {
+            let v = Vec3::new(lx_c[0][i], lx_c[1][i], lx_c[2][i]);
+            match sys.curvature {
+                CurvaturePart::Full => v,
+                CurvaturePart::Normal { axes, n_sheet } => normal_part(&axes[i], i < n_sheet, &v),
+            }
+        })
+        .collect();
     // the three components share the matrix and its factors and are solved
     // side by side (each solve is sequential, so the result does not
     // depend on the thread count)
     let comps: Vec<(Vec<Real>, SolveInfo)> = (0..3)
         .into_par_iter()
         .map(|d| {
-            let xc: Vec<Real> = sys.x.iter().map(|x| x[d]).collect();
-            let mut lx = vec![0.0; n];
-            l.matvec(&xc, &mut lx);
             let b: Vec<Real> = (0..n)
                 .map(|i| {
                     if sys.fixed[i] {
                         sys.u[i][d]
                     } else {
-                        (sys.sigma * sys.dt * sys.area[i] * lx[i] + sys.dt * sys.f_explicit[i][d])
+                        (sys.sigma * sys.dt * sys.area[i] * lx[i][d]
+                            + sys.dt * sys.f_explicit[i][d])
                             / sys.mass[i]
                             + sys.u[i][d]
                     }
@@ -323,6 +377,7 @@ mod tests {
             nu: 0.0,
             sigma,
             dt,
+            curvature: CurvaturePart::Full,
         };
         let sol = solve(&sys, &BicgstabParams::default()).unwrap();
         let expect = dt * sigma * area[0] / (mass[0] * r);
@@ -365,6 +420,7 @@ mod tests {
             nu,
             sigma: 0.0,
             dt,
+            curvature: CurvaturePart::Full,
         };
         let sol = solve(&sys, &BicgstabParams::default()).unwrap();
         let factor = 1.0 / (1.0 + nu * dt * k * k / (r * r));
@@ -400,6 +456,7 @@ mod tests {
             nu: 0.0,
             sigma: 3.0,
             dt: 0.05,
+            curvature: CurvaturePart::Full,
         };
         let sol = solve(&sys, &BicgstabParams::default()).unwrap();
         let explicit = 0.05 * 3.0 * 1e-5 / (1e-7 * r);
@@ -480,5 +537,20 @@ mod tests {
             .count();
         assert_eq!(jumps, k as usize);
         assert!(vals.iter().all(|v| (0.6 - 1e-9..=1.4 + 1e-9).contains(v)));
+    }
+
+    #[test]
+    fn normal_part_keeps_the_sheet_normal_and_drops_the_filament_tangent() {
+        // a rotated frame: b¹, b², b³ orthonormal
+        let (c, s) = (0.6, 0.8);
+        let axes = Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+        let b1: Vec3 = axes.column(0).into();
+        let b2: Vec3 = axes.column(1).into();
+        let b3: Vec3 = axes.column(2).into();
+        let lx = b1 * 2.0 + b2 * -3.0 + b3 * 5.0;
+        let n = normal_part(&axes, true, &lx);
+        assert!((n - b3 * 5.0).norm() < 1e-12, "{n}");
+        let f = normal_part(&axes, false, &lx);
+        assert!((f - (b2 * -3.0 + b3 * 5.0)).norm() < 1e-12, "{f}");
     }
 }

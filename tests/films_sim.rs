@@ -255,37 +255,69 @@ fn wind_inflates_the_ring_film_to_the_young_laplace_curvature() {
     let (_, r_prev) = radii[radii.len() - 2];
     assert!((r / r_prev - 1.0).abs() < 0.02, "{r_prev} -> {r}");
     let m = Manifest::read(&sim.dir.join("manifest.json")).unwrap();
+    let n0 = m.frames[0].counts["sheet"];
     for f in &m.frames {
         assert!((f.total_mass - m0).abs() <= 1e-12 * m0);
-        // the film stays one sheet (reseeding adds a few particles as it stretches)
-        assert!(f.counts["sheet"] >= 856 && f.counts["filament"] + f.counts["point"] == 0);
+        // the film stays one sheet: no filament or point, and reseeding keeps
+        // the count within 2 % (it adds particles where the film stretches and
+        // merges close pairs, 4 of 856 in the first frame)
+        assert!(
+            f.counts["sheet"] * 50 >= n0 * 49 && f.counts["filament"] + f.counts["point"] == 0,
+            "frame {}: {:?}",
+            f.frame,
+            f.counts
+        );
         assert_eq!(f.fallbacks.speed_clamps, 0);
     }
     assert!(sim.state.particles.all_finite());
 }
 
 #[test]
-fn catenoid_pinch_preset_splits_and_its_droplets_stay_in_the_box() {
-    // the shipped preset: the neck pinches (frames 11-12) and shoots droplets
-    // at up to ~30 m/s; they stop at the domain box, mass stays exact
+fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
+    // the shipped preset (s = 3 mm): the neck pinches in frame 13 and the
+    // film splits into two films, each spanning its ring as a disk (paper
+    // Fig. 6), with a few droplets between them; mass stays exact
     let tmp = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/catenoid_pinch.yaml");
-    let sim = run(&scene, tmp.path(), 14, false);
+    let sim = run(&scene, tmp.path(), 16, false);
     let m = &sim.manifest;
     let m0 = m.frames[0].total_mass;
-    let clamps: u64 = m.frames.iter().map(|f| f.fallbacks.wall_clamps).sum();
-    assert!(clamps > 0, "no droplet reached the box");
     let p = &sim.state.particles;
     assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
-    for i in (0..p.len()).filter(|&i| p.codim[i] == codimfx::particles::Codim::Point) {
+    assert!(p.all_finite());
+    use codimfx::particles::Codim;
+    for i in (0..p.len()).filter(|&i| p.codim[i] == Codim::Point) {
         let x = p.x[i];
         for a in 0..3 {
             assert!(x[a] >= -0.08 && x[a] <= 0.08, "droplet at {x}");
         }
     }
-    // the film has split: what is left of the sheet sits at the rings
-    let sheet_near_middle = (0..p.len())
-        .filter(|&i| p.codim[i] == codimfx::particles::Codim::Sheet && p.x[i].z.abs() < 0.02)
-        .count();
-    assert_eq!(sheet_near_middle, 0);
+    // split: no sheet particle is left near the middle
+    let sheet: Vec<usize> = (0..p.len())
+        .filter(|&i| p.codim[i] == Codim::Sheet && !p.fixed[i])
+        .collect();
+    let near_middle = sheet.iter().filter(|&&i| p.x[i].z.abs() < 0.02).count();
+    assert_eq!(near_middle, 0);
+    // each half is a film spanning its ring: sheet particles from close to
+    // the axis (r < R/4) out to the ring (r > 0.9 R), on both sides
+    let ring_r = 0.0512;
+    for side in [-1.0, 1.0] {
+        let r: Vec<f64> = sheet
+            .iter()
+            .filter(|&&i| p.x[i].z * side > 0.0)
+            .map(|&i| p.x[i].x.hypot(p.x[i].y))
+            .collect();
+        assert!(r.len() > 500, "side {side}: {} sheet particles", r.len());
+        let (lo, hi) = r.iter().fold((1.0f64, 0.0f64), |a, &v| (a.0.min(v), a.1.max(v)));
+        assert!(lo < 0.25 * ring_r && hi > 0.9 * ring_r, "side {side}: r in [{lo}, {hi}]");
+    }
+    // the pinch happened after the critical separation 1.3255 R: the first
+    // frame with filaments or points
+    let split = m
+        .frames
+        .iter()
+        .find(|f| f.counts["filament"] + f.counts["point"] > 0)
+        .expect("the film never split");
+    let d = 0.0384 + 2.0 * 0.05 * split.time;
+    assert!(d > 1.3255 * ring_r, "split at d = {d} m ({} R)", d / ring_r);
 }

@@ -33,7 +33,7 @@ use crate::math::{Real, Vec3};
 use crate::mls::{FitStats, MlsError};
 use crate::particles::Particles;
 use crate::solids::SolidSet;
-use crate::tension::{solve as solve_tension, TensionSystem};
+use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
@@ -225,6 +225,10 @@ pub fn solve(
                 nu: prm.surface.viscosity / prm.surface.density,
                 sigma: prm.surface.sigma,
                 dt,
+                curvature: CurvaturePart::Normal {
+                    axes: &surf.axes,
+                    n_sheet: surf.n_sheet(),
+                },
             };
             let sol = solve_tension(&sys, &prm.solver).map_err(solve_err("surface tension"))?;
             info.iterations += sol.info.iter().map(|s| s.iterations).sum::<usize>();

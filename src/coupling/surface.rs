@@ -107,21 +107,9 @@ pub struct Surface {
 
 impl Surface {
     /// The curvature vector ∇²x = (L x)_i with its tangential part removed
-    /// (a sheet keeps its b³ component, a filament loses its b¹ component).
-    /// Analytically κn is normal; on an irregular sampling the MLS row has
-    /// an O(h^k) tangential error which, left in the explicit tension,
-    /// drives the particles along the surface and feeds on the
-    /// irregularity it creates (measured on the resting droplet: tangential
-    /// sheet speed doubling every ~30 ms).
+    /// ([`crate::tension::normal_part`]).
     pub fn normal_curvature(&self, i: usize, lx: &Vec3) -> Vec3 {
-        let b = &self.axes[i];
-        if i < self.n_sheet() {
-            let n: Vec3 = b.column(2).into();
-            n * n.dot(lx)
-        } else {
-            let t: Vec3 = b.column(0).into();
-            lx - t * t.dot(lx)
-        }
+        crate::tension::normal_part(&self.axes[i], i < self.n_sheet(), lx)
     }
 
     /// Number of particles on the joint index.

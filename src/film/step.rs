@@ -34,7 +34,7 @@ use crate::mls::operators::{fit_particle, par_frames, Neighborhoods};
 use crate::mls::{Frame, JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
 use crate::reseed::{reseed_guarded, LocalShape};
-use crate::tension::{solve as solve_tension, TensionSystem};
+use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 use crate::transition::update_codims;
 use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
@@ -408,6 +408,7 @@ pub fn step(
     info.fits = l.stats;
     info.timings.operators = t.elapsed().as_secs_f64();
     let t = Instant::now();
+    let axes: Vec<Mat3> = frames.iter().map(|fr| fr.axes).collect();
     let sys = TensionSystem {
         laplacian: l.matrix.as_ref(),
         mass: &film.mass,
@@ -421,6 +422,10 @@ pub fn step(
         nu: 0.0,
         sigma: prm.sigma,
         dt,
+        curvature: CurvaturePart::Normal {
+            axes: &axes,
+            n_sheet,
+        },
     };
     let sol = solve_tension(&sys, &prm.solver).map_err(|e| FilmError::Solve {
         stage: "surface tension",
