@@ -241,6 +241,9 @@ mod tests {
         let bx = |i: usize| Some(boxes[i]);
         let dense = union_of_boxes_with(boxes.len(), &bx, i64::MAX);
         let hashed = union_of_boxes_with(boxes.len(), &bx, 0);
+        // both tables give the set of block origins, sorted
+        assert_eq!(dense, brute);
+        assert_eq!(hashed, brute);
         assert!(union_of_boxes_with(0, &bx, i64::MAX).is_empty());
         // the parallel grouping equals a stable serial sort of the (block, kernel) pairs
         let reach = |i: usize| -> Vec<u32> {
