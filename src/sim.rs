@@ -18,7 +18,7 @@
 
 use crate::emitter::Jet;
 use crate::film::driver as film_driver;
-use crate::film::{FilmParams, FilmState};
+use crate::film::step::film_speed;
 use crate::grid::MacGrid;
 use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed, SubstepRecord};
 use crate::io::ply::{self, frame_name, PlyError};
@@ -61,16 +61,6 @@ pub enum SimError {
         time: Real,
         /// The stage error.
         source: StepError,
-    },
-    /// A film step failed even after halving the substep.
-    #[error("frame {frame} (t = {time:.5} s): film step failed: {source}")]
-    Film {
-        /// Frame being computed.
-        frame: u32,
-        /// Simulated time when it failed (s).
-        time: Real,
-        /// The stage error.
-        source: crate::film::FilmError,
     },
     /// Sampling produced no particle at all.
     #[error(
@@ -128,8 +118,6 @@ pub struct Sim {
     pub totals: StageTimes,
     /// Seed samples dropped because they fell inside solids.
     pub dropped_in_solid: usize,
-    /// Film-only scenes: the sheet/filament solver and its state (no grid).
-    pub film: Option<(FilmParams, FilmState)>,
     /// The scene's jets (their emission state is a function of time).
     pub jets: Vec<Jet>,
 }
@@ -290,7 +278,7 @@ impl Sim {
                 if let (Some(g), Some(v0)) = (st.gas.as_mut(), rec.gas_v0) {
                     g.v0 = v0;
                 }
-                (film_driver::params_from_scene(&scene), st)
+                st
             });
             // every frame ends at exactly t = f / fps; recomputing it avoids
             // trusting a decimal round trip of the time through JSON
@@ -303,6 +291,7 @@ impl Sim {
                     grid,
                     solids,
                     affine,
+                    film,
                 },
                 params,
                 manifest,
@@ -311,7 +300,6 @@ impl Sim {
                 last_frame,
                 totals: StageTimes::default(),
                 dropped_in_solid: 0,
-                film,
                 jets,
             });
         }
@@ -359,16 +347,12 @@ impl Sim {
         write_atomic(&p0, &bytes).map_err(io_err(&p0))?;
         manifest.frames.push(base_record(0, 0.0, &particles));
         manifest.write(&mpath)?;
-        let film = film_only.then(|| {
-            (
-                film_driver::params_from_scene(&scene),
-                film_driver::initial_state(&scene),
-            )
-        });
+        let mut state = SimState::new(particles, grid, solids);
+        state.film = film_only.then(|| film_driver::initial_state(&scene));
         Ok(Sim {
             scene,
             dir,
-            state: SimState::new(particles, grid, solids),
+            state,
             params,
             manifest,
             frame: 0,
@@ -376,7 +360,6 @@ impl Sim {
             last_frame,
             totals: StageTimes::default(),
             dropped_in_solid: rep.dropped_in_solid,
-            film,
             jets,
         })
     }
@@ -391,29 +374,20 @@ impl Sim {
         let (mut dt_min, mut dt_max) = (Real::INFINITY, 0.0 as Real);
         let mut substeps = 0;
         let dx = self.scene.domain.dx;
-        if let Some((prm, st)) = self.film.as_mut() {
-            let (n, lo, hi) = film_driver::advance(
-                &mut self.state.particles,
-                st,
-                prm,
-                &self.scene,
-                self.time,
-                t_end,
-                &mut rec,
-                &mut times,
-            )
-            .map_err(|source| SimError::Film {
-                frame: f,
-                time: self.time,
-                source,
-            })?;
-            self.time = t_end;
-            substeps = n;
-            dt_min = lo;
-            dt_max = hi;
-        } else {
-            while self.time < t_end {
-                let rem = t_end - self.time;
+        let film_spacing = film_driver::spacing(&self.scene);
+        while self.time < t_end {
+            let rem = t_end - self.time;
+            let (dt, last) = if self.params.film.is_some() {
+                // sheets, filaments and droplets only: motion per substep
+                // at most `film.cfl` particle spacings
+                film_driver::substep(
+                    self.scene.time.max_dt,
+                    self.scene.film.cfl,
+                    film_spacing,
+                    film_speed(&self.state.particles),
+                    rem,
+                )
+            } else {
                 let mut dt = cfl_dt(
                     &self.state.particles,
                     dx,
@@ -437,64 +411,83 @@ impl Sim {
                 } else if dt > 0.5 * rem {
                     dt = 0.5 * rem;
                 }
-                let t1 = if last { t_end } else { self.time + dt };
-                rec.emitted += emit_jets(&self.jets, self.time, t1, &mut self.state) as u64;
-                // jets that are on during [t, t1) feed the liquid through their nozzle disk
-                self.params.inflow = self
-                    .jets
-                    .iter()
-                    .filter(|j| self.time < j.stop && t1 > j.start)
-                    .map(|j| crate::grid::Inflow {
-                        origin: j.origin,
-                        direction: j.direction,
-                        radius: j.radius,
-                        speed: j.speed,
-                    })
-                    .collect();
-                let info =
-                    step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
-                        SimError::Step {
-                            frame: f,
-                            time: self.time,
-                            source,
-                        }
-                    })?;
-                self.time = t1;
-                substeps += 1;
-                dt_min = dt_min.min(dt);
-                dt_max = dt_max.max(dt);
-                let s = &info.pressure.solve;
-                rec.pressure.add(s.iterations, s.rel_residual, s.converged);
-                rec.substep_log.push(SubstepRecord {
-                    dt,
-                    iterations: s.iterations,
-                    residual: s.rel_residual,
-                    cells: info.pressure.cells,
-                });
-                if let Some(v) = info.viscosity {
-                    for s in v {
-                        rec.viscosity.add(s.iterations, s.rel_residual, s.converged);
+                (dt, last)
+            };
+            let t1 = if last { t_end } else { self.time + dt };
+            rec.emitted += emit_jets(&self.jets, self.time, t1, &mut self.state) as u64;
+            // jets that are on during [t, t1) feed the liquid through their nozzle disk
+            self.params.inflow = self
+                .jets
+                .iter()
+                .filter(|j| self.time < j.stop && t1 > j.start)
+                .map(|j| crate::grid::Inflow {
+                    origin: j.origin,
+                    direction: j.direction,
+                    radius: j.radius,
+                    speed: j.speed,
+                })
+                .collect();
+            let info = step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
+                SimError::Step {
+                    frame: f,
+                    time: self.time,
+                    source,
+                }
+            })?;
+            self.time = t1;
+            substeps += 1;
+            dt_min = dt_min.min(dt);
+            dt_max = dt_max.max(dt);
+            rec.transitions.add(&info.transitions);
+            rec.reseed.add(&info.reseed);
+            rec.fallbacks.wall_clamps += info.advect.wall_clamps as u64;
+            if let Some(fs) = &info.film {
+                let tol = self.params.film.as_ref().map_or(0.0, |fp| fp.solver.tol);
+                for si in &fs.info.tension_solve {
+                    rec.tension
+                        .add(si.iterations as u32, si.rel_residual, si.rel_residual <= 10.0 * tol);
+                }
+                for si in &fs.info.viscosity_solve {
+                    if si.iterations > 0 {
+                        rec.viscosity.add(si.iterations as u32, si.rel_residual, true);
                     }
                 }
-                rec.fallbacks.solid_pushouts += info.advect.solid_pushouts as u64;
-                rec.fallbacks.wall_clamps += info.advect.wall_clamps as u64;
-                rec.fallbacks.theta_clamps += info.pressure.theta_clamps as u64;
-                if let Some(c) = &info.coupling {
-                    rec.constraint_faces = rec.constraint_faces.max(c.faces);
-                    rec.surface = c.counts;
-                    rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
-                }
-                rec.transitions.add(&info.transitions);
-                rec.reseed.add(&info.reseed);
-                rec.liquid_volume = info.liquid_volume;
-                rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
-                rec.blocks = rec.blocks.max(info.blocks);
+                rec.fallbacks.step_halvings += fs.halvings as u64;
+                rec.fallbacks.speed_clamps += fs.speed_clamps as u64;
+                continue;
             }
+            let s = &info.pressure.solve;
+            rec.pressure.add(s.iterations, s.rel_residual, s.converged);
+            rec.substep_log.push(SubstepRecord {
+                dt,
+                iterations: s.iterations,
+                residual: s.rel_residual,
+                cells: info.pressure.cells,
+            });
+            if let Some(v) = info.viscosity {
+                for s in v {
+                    rec.viscosity.add(s.iterations, s.rel_residual, s.converged);
+                }
+            }
+            rec.fallbacks.solid_pushouts += info.advect.solid_pushouts as u64;
+            rec.fallbacks.theta_clamps += info.pressure.theta_clamps as u64;
+            if let Some(c) = &info.coupling {
+                rec.constraint_faces = rec.constraint_faces.max(c.faces);
+                rec.surface = c.counts;
+                rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
+            }
+            rec.liquid_volume = info.liquid_volume;
+            rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);
+            rec.blocks = rec.blocks.max(info.blocks);
+        }
+        if let Some(fs) = &self.state.film {
+            rec.gas_v0 = fs.gas.map(|g| g.v0);
         }
         let p = &self.state.particles;
         let affine =
             (self.params.transfer == Transfer::Apic).then_some(self.state.affine.as_slice());
         let fv = self
+            .params
             .film
             .as_ref()
             .map(|_| film_driver::frame_vectors(p, self.scene.domain.dx));

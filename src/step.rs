@@ -16,9 +16,17 @@
 //! for bit. Steps 2–3 (codimension update §8, reseeding §9) go right after
 //! the advection, the MLS viscosity of §5 next to the grid viscosity, and the
 //! monolithic tension/coupling solve of §7 replaces the projection call.
+//!
+//! Scenes without liquid (films, filaments and droplets only) allocate no
+//! grid: for them [`step`] runs Algorithm 1 on the particles alone
+//! ([`crate::film::step`]: advection, §8 transitions, §9 reseeding,
+//! explicit forces, §5 viscosity, §6 semi-implicit tension), halving the
+//! substep when a solve fails, and the grid stages report 0 s.
 
 use crate::advect::{advect, AdvectInfo};
 use crate::coupling::{self, CouplingError, CouplingInfo, CouplingParams, Method, SurfaceParams};
+use crate::film::step::step_with_retry;
+use crate::film::{FilmError, FilmParams, FilmState, FilmStepInfo};
 use crate::grid::pcg::{NotFinite, PcgParams, SolveInfo};
 use crate::grid::projection::{project_liquid, ProjectionInfo};
 use crate::grid::transfer::{grid_to_particles, grid_to_particles_apic, transfer_to_grid};
@@ -116,6 +124,9 @@ pub struct StepParams {
     /// Surface tension coupling (§7); `None` when σ = 0 and the scene has
     /// no sheet or filament particles (the plain projection runs).
     pub coupling: Option<CouplingParams>,
+    /// Scenes without liquid: the film step's parameters (no grid stage
+    /// runs); `None` for scenes with liquid.
+    pub film: Option<FilmParams>,
 }
 
 impl StepParams {
@@ -142,6 +153,7 @@ impl StepParams {
             hi: Vec3::from(s.domain.max),
             inflow: Vec::new(),
             coupling: (s.physics.surface_tension > 0.0).then(|| coupling_params(s)),
+            film: (!s.has_liquid()).then(|| crate::film::driver::params_from_scene(s)),
         }
     }
 }
@@ -217,6 +229,9 @@ pub struct SimState {
     /// `particles`; empty unless `solver.transfer: apic`. Stages that insert
     /// or delete particles keep it aligned (new particles: zero).
     pub affine: Vec<[Vec3; 3]>,
+    /// State of the film step (the enclosed gas of a bubble), for scenes
+    /// without liquid.
+    pub film: Option<FilmState>,
 }
 
 impl SimState {
@@ -227,6 +242,7 @@ impl SimState {
             grid,
             solids,
             affine: Vec::new(),
+            film: None,
         }
     }
 }
@@ -252,11 +268,27 @@ pub struct SubstepInfo {
     pub liquid_volume: Real,
     /// Allocated grid blocks.
     pub blocks: usize,
+    /// The film step's record (scenes without liquid).
+    pub film: Option<FilmSubstep>,
+}
+
+/// What a film substep did besides the common fields.
+#[derive(Clone, Debug, Default)]
+pub struct FilmSubstep {
+    /// The last (sub-)step's record.
+    pub info: FilmStepInfo,
+    /// Times the substep was halved after a failed solve.
+    pub halvings: u32,
+    /// Velocities clamped to `film.max_speed`.
+    pub speed_clamps: usize,
 }
 
 /// Why a substep failed.
 #[derive(Debug, thiserror::Error)]
 pub enum StepError {
+    /// A film step failed even after halving the substep.
+    #[error("film step failed: {0}")]
+    Film(#[from] FilmError),
     /// The coupled pressure/tension solve failed.
     #[error("coupled surface tension solve: {0}")]
     Coupling(#[from] CouplingError),
@@ -311,6 +343,9 @@ pub fn step(
     dt: Real,
     times: &mut StageTimes,
 ) -> Result<SubstepInfo, StepError> {
+    if let Some(fp) = &p.film {
+        return film_substep(st, fp, p, dt, times);
+    }
     let mut info = SubstepInfo {
         dt,
         ..Default::default()
@@ -324,6 +359,7 @@ pub fn step(
         grid,
         solids,
         affine,
+        ..
     } = st;
     // 4: body force
     timed(times, "body_force", || {
@@ -415,6 +451,59 @@ pub fn step(
         });
     }
     Ok(info)
+}
+
+/// The substep of a scene without liquid: Algorithm 1 on the particles
+/// alone ([`crate::film::step::step`], halved up to 4 times when a solve
+/// fails), then droplets stopped at the domain box and the optional speed
+/// limit (both counted).
+fn film_substep(
+    st: &mut SimState,
+    fp: &FilmParams,
+    p: &StepParams,
+    dt: Real,
+    times: &mut StageTimes,
+) -> Result<SubstepInfo, StepError> {
+    let fs = st.film.get_or_insert_with(FilmState::default);
+    let (info, halvings) = step_with_retry(&mut st.particles, fs, fp, dt, 4)?;
+    let tm = &info.timings;
+    for (k, v) in [
+        ("advect", tm.advect),
+        ("transition", tm.transition),
+        ("reseed", tm.reseed),
+        ("film_forces", tm.forces),
+        ("film_viscosity", tm.viscosity),
+        ("mls_operators", tm.operators),
+        ("tension", tm.tension),
+    ] {
+        times.add(k, v);
+    }
+    let wall_clamps = crate::film::driver::close_walls(&mut st.particles, p.lo, p.hi);
+    let mut speed_clamps = 0;
+    if fp.max_speed > 0.0 {
+        for v in st.particles.v.iter_mut() {
+            let m = v.norm();
+            if m > fp.max_speed {
+                *v *= fp.max_speed / m;
+                speed_clamps += 1;
+            }
+        }
+    }
+    Ok(SubstepInfo {
+        dt,
+        transitions: info.transitions,
+        reseed: info.reseed,
+        advect: AdvectInfo {
+            wall_clamps,
+            ..Default::default()
+        },
+        film: Some(FilmSubstep {
+            info,
+            halvings,
+            speed_clamps,
+        }),
+        ..Default::default()
+    })
 }
 
 /// Largest stable substep (s) for the current particle velocities:

@@ -113,7 +113,13 @@ fn run_and_check(sim: &mut Sim, label: &str) -> Result<u32, String> {
         Err(e) => {
             let msg = e.to_string();
             assert!(
-                matches!(e, SimError::Film { .. }),
+                matches!(
+                    e,
+                    SimError::Step {
+                        source: codimfx::step::StepError::Film(_),
+                        ..
+                    }
+                ),
                 "{label}: unexpected error {msg}"
             );
             // frame, stage and cause

@@ -1,20 +1,17 @@
-//! Runs film-only scenes inside the frame loop of [`crate::sim`]: parameters
-//! from the scene, CFL substepping (motion per substep limited to
-//! `film.cfl` particle spacings), the counted speed-limit fallback, and the
-//! per-frame record (stage times, solver figures, transition and reseeding
-//! counts). No grid is allocated and the grid stages report 0 s.
+//! Film-only scenes (no liquid, no grid): the film step's parameters and
+//! initial state from the scene, the substep length (motion per substep
+//! limited to `film.cfl` particle spacings), droplets stopped at the domain
+//! box, and the cache's frame vectors. The frame loop is [`crate::sim`]'s and
+//! the substep [`crate::step::step`]'s, as for every scene.
 
-use super::step::{film_speed, step_with_retry};
-use super::{FilmError, FilmParams, FilmState, Wind};
+use super::{FilmParams, FilmState, Wind};
 use crate::gas::GasPocket;
-use crate::io::manifest::FrameRecord;
 use crate::linsolve::BicgstabParams;
 use crate::math::{Real, Vec3};
 use crate::mls::operators::{par_frames, Neighborhoods};
 use crate::mls::MlsParams;
 use crate::particles::{Codim, Particles};
 use crate::scene::{FilmBody, Scene};
-use crate::step::StageTimes;
 
 /// Film solver parameters of a validated scene (h = Δx).
 pub fn params_from_scene(s: &Scene) -> FilmParams {
@@ -54,6 +51,7 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
         tol: f.solver_tolerance,
         max_iter: f.solver_max_iterations,
     };
+    prm.max_speed = f.max_speed;
     prm.rim_modulation = f
         .rim_modulation
         .as_ref()
@@ -136,8 +134,7 @@ pub fn substep(max_dt: Real, cfl: Real, spacing: Real, vmax: Real, rem: Real) ->
 /// back on the wall and loses its outward velocity. Sheets and filaments
 /// are left alone (a bubble's retracting rim may pass the box). Returns
 /// the number of clamped coordinates (the manifest's `fallbacks.wall_clamps`).
-fn close_walls(p: &mut Particles, s: &Scene) -> usize {
-    let (lo, hi) = (s.domain.min, s.domain.max);
+pub fn close_walls(p: &mut Particles, lo: Vec3, hi: Vec3) -> usize {
     let mut n = 0;
     for i in 0..p.len() {
         if p.fixed[i] || p.codim[i] != Codim::Point {
@@ -156,68 +153,4 @@ fn close_walls(p: &mut Particles, s: &Scene) -> usize {
         }
     }
     n
-}
-
-/// Advances the film from `t` to `t_end`, filling the frame record. Returns
-/// the number of substeps and the step range (min, max).
-pub fn advance(
-    p: &mut Particles,
-    st: &mut FilmState,
-    prm: &FilmParams,
-    s: &Scene,
-    mut t: Real,
-    t_end: Real,
-    rec: &mut FrameRecord,
-    times: &mut StageTimes,
-) -> Result<(u32, Real, Real), FilmError> {
-    let sp = spacing(s);
-    let (mut n, mut dmin, mut dmax) = (0u32, Real::INFINITY, 0.0 as Real);
-    while t < t_end {
-        let (dt, last) = substep(s.time.max_dt, s.film.cfl, sp, film_speed(p), t_end - t);
-        let (info, halvings) = step_with_retry(p, st, prm, dt, 4)?;
-        t = if last { t_end } else { t + dt };
-        n += 1;
-        dmin = dmin.min(dt);
-        dmax = dmax.max(dt);
-        let tm = &info.timings;
-        for (k, v) in [
-            ("advect", tm.advect),
-            ("transition", tm.transition),
-            ("reseed", tm.reseed),
-            ("film_forces", tm.forces),
-            ("film_viscosity", tm.viscosity),
-            ("mls_operators", tm.operators),
-            ("tension", tm.tension),
-        ] {
-            times.add(k, v);
-        }
-        for si in &info.tension_solve {
-            rec.tension.add(
-                si.iterations as u32,
-                si.rel_residual,
-                si.rel_residual <= 10.0 * prm.solver.tol,
-            );
-        }
-        for si in &info.viscosity_solve {
-            if si.iterations > 0 {
-                rec.viscosity
-                    .add(si.iterations as u32, si.rel_residual, true);
-            }
-        }
-        rec.transitions.add(&info.transitions);
-        rec.reseed.add(&info.reseed);
-        rec.fallbacks.step_halvings += halvings as u64;
-        rec.fallbacks.wall_clamps += close_walls(p, s) as u64;
-        if s.film.max_speed > 0.0 {
-            for v in p.v.iter_mut() {
-                let m = v.norm();
-                if m > s.film.max_speed {
-                    *v *= s.film.max_speed / m;
-                    rec.fallbacks.speed_clamps += 1;
-                }
-            }
-        }
-    }
-    rec.gas_v0 = st.gas.map(|g| g.v0);
-    Ok((n, dmin, dmax))
 }

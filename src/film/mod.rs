@@ -69,6 +69,9 @@ pub struct FilmParams {
     pub sheet_line_ratio: Real,
     /// Rim tension modulation (fluid polygon): corners and amplitude about the vertical axis through `centre`.
     pub rim_modulation: Option<(u32, Real, Vec3)>,
+    /// Speed limit (m/s) applied after each substep of a scene, counted
+    /// (`fallbacks.speed_clamps`); 0 for none.
+    pub max_speed: Real,
 }
 
 impl FilmParams {
@@ -105,6 +108,7 @@ impl FilmParams {
             clump_ratio: 0.3,
             sheet_line_ratio: 0.05,
             rim_modulation: None,
+            max_speed: 0.0,
         }
     }
 }

@@ -535,7 +535,8 @@ pub fn step_with_retry(
 /// Advances the films by `duration` in substeps whose motion stays below
 /// `cfl` × `spacing` (the last substeps split so none is tiny); returns the
 /// number of substeps. Used by the validation cases; scenes go through
-/// [`crate::film::driver::advance`], which also keeps the frame record.
+/// [`crate::step::step`] in the frame loop of [`crate::sim`], which also
+/// keeps the frame record.
 pub fn advance_by(
     parts: &mut Particles,
     state: &mut FilmState,

@@ -4,7 +4,7 @@
 //! the catenoid (~63k, Δt = 0.005 s, 1/30 s frames). `--frames` frames from
 //! the initial state are simulated with the substepping of `codimfx sim`
 //! (Δt = min(paper Δt, `--cfl` spacings / max speed), see
-//! [`codimfx::film::driver::advance`]); the table gives seconds per frame,
+//! [`codimfx::film::driver::substep`]); the table gives seconds per frame,
 //! per stage and in all, the substeps per frame and the seconds per substep.
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
@@ -77,7 +77,13 @@ fn bubble(s: Real) -> (Particles, FilmParams, FilmState, Real) {
 }
 
 fn catenoid(s: Real) -> (Particles, FilmParams, FilmState, Real) {
-    let p = CatenoidSetup::paper(s).particles();
+    // the inertial thickness of presets/catenoid.yaml (film plus the air it
+    // moves, docs/decisions.md)
+    let p = CatenoidSetup {
+        thickness: 3e-5,
+        ..CatenoidSetup::paper(s)
+    }
+    .particles();
     let mut prm = FilmParams::new(3.0 * s, 0.015);
     prm.gravity = Vec3::zeros();
     prm.damping = 5.0;
@@ -129,7 +135,7 @@ pub fn run(a: FilmsArgs) -> Result<()> {
         let t0 = std::time::Instant::now();
         let mut arcs = vec![rim_arc(&p)];
         for f in 0..a.frames {
-            // the substepping of `film::driver::advance`
+            // the substepping of `codimfx sim` (`film::driver::substep`)
             let mut left = frame;
             while left > 1e-12 * frame {
                 let (dt, _) = substep(max_dt, cfl, spacing, film_speed(&p), left);
