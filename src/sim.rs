@@ -444,12 +444,16 @@ impl Sim {
             if let Some(fs) = &info.film {
                 let tol = self.params.film.as_ref().map_or(0.0, |fp| fp.solver.tol);
                 for si in &fs.info.tension_solve {
-                    rec.tension
-                        .add(si.iterations as u32, si.rel_residual, si.rel_residual <= 10.0 * tol);
+                    rec.tension.add(
+                        si.iterations as u32,
+                        si.rel_residual,
+                        si.rel_residual <= 10.0 * tol,
+                    );
                 }
                 for si in &fs.info.viscosity_solve {
                     if si.iterations > 0 {
-                        rec.viscosity.add(si.iterations as u32, si.rel_residual, true);
+                        rec.viscosity
+                            .add(si.iterations as u32, si.rel_residual, true);
                     }
                 }
                 rec.fallbacks.step_halvings += fs.halvings as u64;

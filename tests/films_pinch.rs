@@ -145,7 +145,10 @@ fn catenoid_with_separating_rings_pinches_and_splits_into_two_films() {
             .filter(|&i| !p.fixed[i] && p.codim[i] == Codim::Sheet && p.x[i].z * side > 0.0)
             .map(|i| p.x[i].x.hypot(p.x[i].y))
             .fold(Real::INFINITY, Real::min);
-        assert!(r_min < 0.25 * r_ring, "side {side}: film reaches r = {r_min}");
+        assert!(
+            r_min < 0.25 * r_ring,
+            "side {side}: film reaches r = {r_min}"
+        );
     }
     let pc: Vec<_> = pieces(&p, h).into_iter().filter(|c| c.0 > 20).collect();
     assert!(

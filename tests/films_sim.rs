@@ -308,8 +308,13 @@ fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
             .map(|&i| p.x[i].x.hypot(p.x[i].y))
             .collect();
         assert!(r.len() > 500, "side {side}: {} sheet particles", r.len());
-        let (lo, hi) = r.iter().fold((1.0f64, 0.0f64), |a, &v| (a.0.min(v), a.1.max(v)));
-        assert!(lo < 0.25 * ring_r && hi > 0.9 * ring_r, "side {side}: r in [{lo}, {hi}]");
+        let (lo, hi) = r
+            .iter()
+            .fold((1.0f64, 0.0f64), |a, &v| (a.0.min(v), a.1.max(v)));
+        assert!(
+            lo < 0.25 * ring_r && hi > 0.9 * ring_r,
+            "side {side}: r in [{lo}, {hi}]"
+        );
     }
     // the pinch happened after the critical separation 1.3255 R: the first
     // frame with filaments or points
