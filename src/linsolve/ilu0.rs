@@ -50,14 +50,49 @@ impl Preconditioner for Jacobi {
     }
 }
 
-/// ILU(0) factors stored in A's pattern: the strictly lower part holds L
-/// (unit diagonal implied), the rest holds U. Column indices in each row must
-/// be sorted (faer's are).
+/// ILU(0) factors: L (unit diagonal implied) and U without its diagonal,
+/// each in its own compressed rows, and U's diagonal apart. The triangular
+/// solves stream the factors from memory, so each reads only its own factor,
+/// contiguously, with u32 column indices (12 instead of 16 bytes per entry;
+/// `docs/benchmarks.md`). Column indices in each row of A must be sorted
+/// (faer's are).
 pub struct Ilu0 {
-    row_ptr: Vec<usize>,
-    col: Vec<usize>,
+    l: Triangle,
+    u: Triangle,
+    diag: Vec<f64>,
+}
+
+/// Strictly triangular rows: row i is `col[ptr[i]..ptr[i + 1]]`, `val[..]`.
+struct Triangle {
+    ptr: Vec<usize>,
+    col: Vec<u32>,
     val: Vec<f64>,
-    diag: Vec<usize>,
+}
+
+impl Triangle {
+    /// The entries `rows(i)` (index ranges into `col`/`val`) of every row.
+    fn gather(
+        n: usize,
+        col: &[usize],
+        val: &[f64],
+        rows: impl Fn(usize) -> std::ops::Range<usize>,
+    ) -> Triangle {
+        let mut ptr = Vec::with_capacity(n + 1);
+        ptr.push(0);
+        let (mut c, mut v) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            for k in rows(i) {
+                c.push(col[k] as u32);
+                v.push(val[k]);
+            }
+            ptr.push(c.len());
+        }
+        Triangle {
+            ptr,
+            col: c,
+            val: v,
+        }
+    }
 }
 
 impl Ilu0 {
@@ -114,11 +149,15 @@ impl Ilu0 {
                 return Err(SolveError::ZeroPivot { row: i });
             }
         }
+        if n > u32::MAX as usize {
+            return Err(SolveError::Dimension(format!(
+                "ILU(0) of {n} rows: more than u32 indices hold"
+            )));
+        }
         Ok(Ilu0 {
-            row_ptr,
-            col,
-            val,
-            diag,
+            l: Triangle::gather(n, &col, &val, |i| row_ptr[i]..diag[i]),
+            u: Triangle::gather(n, &col, &val, |i| diag[i] + 1..row_ptr[i + 1]),
+            diag: diag.iter().map(|&k| val[k]).collect(),
         })
     }
 }
@@ -126,21 +165,22 @@ impl Ilu0 {
 impl Preconditioner for Ilu0 {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let n = r.len();
+        let (l, u) = (&self.l, &self.u);
         // L y = r (unit lower)
         for i in 0..n {
             let mut acc = r[i];
-            for k in self.row_ptr[i]..self.diag[i] {
-                acc -= self.val[k] * z[self.col[k]];
+            for k in l.ptr[i]..l.ptr[i + 1] {
+                acc -= l.val[k] * z[l.col[k] as usize];
             }
             z[i] = acc;
         }
         // U z = y
         for i in (0..n).rev() {
             let mut acc = z[i];
-            for k in self.diag[i] + 1..self.row_ptr[i + 1] {
-                acc -= self.val[k] * z[self.col[k]];
+            for k in u.ptr[i]..u.ptr[i + 1] {
+                acc -= u.val[k] * z[u.col[k] as usize];
             }
-            z[i] = acc / self.val[self.diag[i]];
+            z[i] = acc / self.diag[i];
         }
     }
 }
