@@ -20,8 +20,9 @@ fn coarse_catenoid(dir: &Path) -> std::path::PathBuf {
     p
 }
 
-fn run(scene: &Path, out: &Path, frames: u32, resume: bool) -> Sim {
-    let mut sim = Sim::open(
+/// Opens `scene` with its cache under `out`, up to frame `frames`.
+fn open(scene: &Path, out: &Path, frames: u32, resume: bool) -> Sim {
+    Sim::open(
         scene,
         &RunOptions {
             out_root: Some(out.to_path_buf()),
@@ -30,7 +31,11 @@ fn run(scene: &Path, out: &Path, frames: u32, resume: bool) -> Sim {
             scale: None,
         },
     )
-    .unwrap();
+    .unwrap()
+}
+
+fn run(scene: &Path, out: &Path, frames: u32, resume: bool) -> Sim {
+    let mut sim = open(scene, out, frames, resume);
     sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();
     sim
 }
@@ -107,16 +112,7 @@ fn bursting_bubble_rim_retracts_at_the_taylor_culick_speed_past_40_ms() {
     std::fs::write(&scene, text).unwrap();
     let (r0, sigma, rho, tau): (f64, f64, f64, f64) = (0.0576, 5e-4, 1000.0, 1e-6);
     let v_tc: f64 = (2.0 * sigma / (rho * tau)).sqrt();
-    let mut sim = Sim::open(
-        &scene,
-        &RunOptions {
-            out_root: Some(tmp.path().to_path_buf()),
-            frames: Some(6),
-            resume: false,
-            scale: None,
-        },
-    )
-    .unwrap();
+    let mut sim = open(&scene, tmp.path(), 6, false);
     let m0 = sim.state.particles.total_mass();
     // rim position: arc length from the hole axis (+y) to the sheet's edge
     // (2nd percentile of the sheet particles' polar angles); cap radius
@@ -206,16 +202,7 @@ fn wind_inflates_the_ring_film_to_the_young_laplace_curvature() {
     std::fs::write(&scene, text).unwrap();
     let (a, sigma, rho_air, drag, w): (f64, f64, f64, f64, f64) = (0.0192, 0.01, 1.2, 1.0, 1.0);
     let r_pred = 4.0 * sigma / (drag * rho_air * w * w);
-    let mut sim = Sim::open(
-        &scene,
-        &RunOptions {
-            out_root: Some(tmp.path().to_path_buf()),
-            frames: Some(15),
-            resume: false,
-            scale: None,
-        },
-    )
-    .unwrap();
+    let mut sim = open(&scene, tmp.path(), 15, false);
     let m0 = sim.state.particles.total_mass();
     // apex curvature: least-squares fit y = y0 + c ρ² over the free film
     // within ρ < a/2 of the axis; a cap bulging to +y has c < 0, R = −1/(2c)
@@ -280,16 +267,7 @@ fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
     use codimfx::particles::Codim;
     let tmp = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/catenoid_pinch.yaml");
-    let mut sim = Sim::open(
-        &scene,
-        &RunOptions {
-            out_root: Some(tmp.path().to_path_buf()),
-            frames: Some(16),
-            resume: false,
-            scale: None,
-        },
-    )
-    .unwrap();
+    let mut sim = open(&scene, tmp.path(), 16, false);
     // the split: the first frame with no sheet particle left near the middle
     let mut split = None;
     sim.run(&AtomicBool::new(false), |s, _| {
