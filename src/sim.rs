@@ -405,13 +405,7 @@ impl Sim {
                 if v_jet > 0.0 {
                     dt = dt.min(self.scene.time.cfl * dx / v_jet);
                 }
-                let last = dt >= rem;
-                if last {
-                    dt = rem;
-                } else if dt > 0.5 * rem {
-                    dt = 0.5 * rem;
-                }
-                (dt, last)
+                film_driver::fit_to_frame(dt, rem)
             };
             let t1 = if last { t_end } else { self.time + dt };
             rec.emitted += emit_jets(&self.jets, self.time, t1, &mut self.state) as u64;

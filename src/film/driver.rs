@@ -119,6 +119,14 @@ pub fn substep(max_dt: Real, cfl: Real, spacing: Real, vmax: Real, rem: Real) ->
     if vmax > 0.0 {
         dt = dt.min(cfl * spacing / vmax);
     }
+    fit_to_frame(dt, rem)
+}
+
+/// A substep of at most `dt` with `rem` seconds of the frame left: the rest
+/// of the frame when it fits, half of it when `dt` would leave a sliver
+/// shorter than `dt`; returns it and whether it ends the frame. Every scene's
+/// frame loop uses it ([`crate::sim`]).
+pub fn fit_to_frame(dt: Real, rem: Real) -> (Real, bool) {
     if dt >= rem {
         (rem, true)
     } else if dt > 0.5 * rem {
