@@ -143,31 +143,50 @@ pub fn conserve_volume(grid: &mut WorkGrid, signs: &SignField, target: Real, ban
             .filter(|b| !grid.index.contains_key(*b))
             .count() as Real
             * LEAF_SIZE as Real;
-    // V(s), A(s) of the shifted field φ + s; per-leaf sums in parallel,
-    // added in leaf order (a rayon `reduce` adds in an order that depends
-    // on work stealing, so its last bits could change from run to run)
+    // Newton iterations move s within ±lim, so a set voxel with |φ| ≥ ε + lim gives H = 0 or 1
+    // and δ = 0 whatever s is; voxels that are not set are not shifted. Those are summed once,
+    // and only the other set voxels (about a third of the band) are kept, per leaf, for the
+    // evaluations: per leaf in parallel, then added in leaf order (a rayon `reduce` adds in an
+    // order that depends on work stealing, so its last bits could change from run to run)
+    let lim = 0.5 * band * h;
+    let reach = eps + lim;
+    let per_leaf: Vec<(Real, Real, Vec<f32>)> = grid
+        .leaves
+        .par_iter()
+        .map(|l| {
+            let (mut v, mut a) = (0.0, 0.0);
+            let mut near = Vec::new();
+            for n in 0..LEAF_SIZE {
+                let phi = l.phi[n];
+                if !l.is_set(n) {
+                    v += heav(-(phi as Real));
+                    a += delta(phi as Real);
+                } else if (phi.abs() as Real) < reach {
+                    near.push(phi);
+                } else if phi < 0.0 {
+                    v += 1.0;
+                }
+            }
+            (v, a, near)
+        })
+        .collect();
     let eval = |s: Real| {
-        let per_leaf: Vec<(Real, Real)> = grid
-            .leaves
+        let sums: Vec<(Real, Real)> = per_leaf
             .par_iter()
-            .map(|l| {
-                let mut v = 0.0;
-                let mut a = 0.0;
-                for n in 0..LEAF_SIZE {
-                    let phi = l.phi[n] as Real + if l.is_set(n) { s } else { 0.0 };
+            .map(|(v0, a0, near)| {
+                let (mut v, mut a) = (*v0, *a0);
+                for &phi in near {
+                    let phi = phi as Real + s;
                     v += heav(-phi);
                     a += delta(phi);
                 }
                 (v, a)
             })
             .collect();
-        let (v, a) = per_leaf
-            .iter()
-            .fold((0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+        let (v, a) = sums.iter().fold((0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
         ((v + interior) * h3, a * h3)
     };
     // Newton iterations on V(s) = V_p (V decreases with s at rate A)
-    let lim = 0.5 * band * h;
     let mut shift = 0.0;
     for _ in 0..4 {
         let (vol, area) = eval(shift);

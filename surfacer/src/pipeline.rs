@@ -414,16 +414,23 @@ pub fn check_finite(frame: u32, g: &FrameGeometry) -> Result<(), SurfaceError> {
 /// Writes the four outputs of a frame, each atomically, after checking every value is finite.
 pub fn write_outputs(dir: &Path, frame: u32, g: &FrameGeometry) -> Result<(), SurfaceError> {
     check_finite(frame, g)?;
-    crate::vdb::write_vdb(&output_path(dir, "surface", frame, "vdb"), &g.levelset)?;
     let c = format!("codimfx surface frame {frame}");
-    crate::ply::write_mesh(&output_path(dir, "mesh", frame, "ply"), &g.mesh, &c)?;
-    crate::ply::write_mesh(&output_path(dir, "sheets", frame, "ply"), &g.sheets, &c)?;
-    crate::ply::write_mesh(
-        &output_path(dir, "filaments", frame, "ply"),
-        &g.filaments,
-        &c,
-    )?;
-    Ok(())
+    // the VDB (compressed leaf by leaf on the pool) and the meshes (serial byte copies) are
+    // written side by side; each file still appears atomically, and the first error is reported
+    let (vdb, meshes) = rayon::join(
+        || crate::vdb::write_vdb(&output_path(dir, "surface", frame, "vdb"), &g.levelset),
+        || {
+            crate::ply::write_mesh(&output_path(dir, "mesh", frame, "ply"), &g.mesh, &c)?;
+            crate::ply::write_mesh(&output_path(dir, "sheets", frame, "ply"), &g.sheets, &c)?;
+            crate::ply::write_mesh(
+                &output_path(dir, "filaments", frame, "ply"),
+                &g.filaments,
+                &c,
+            )
+        },
+    );
+    vdb?;
+    meshes
 }
 
 /// Surfaces the frames of `cache_dir` (all, or those in `range` inclusive) into `out_dir`,
