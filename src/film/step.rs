@@ -35,7 +35,7 @@ use crate::mls::{Frame, JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
 use crate::reseed::{reseed_guarded, LocalShape};
 use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
-use crate::transition::update_codims;
+use crate::transition::{cone_census, update_codims};
 use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
 use std::cmp::Ordering;
@@ -191,21 +191,56 @@ pub fn step(
         if let Some(tp) = &prm.transitions {
             let was_filament: Vec<bool> =
                 film.codim.iter().map(|c| *c == Codim::Filament).collect();
-            // a sheet particle within h of a *moving* ring particle is attached
-            // to the ring, not at a free edge: it keeps its codimension. (With
-            // moving rings reseeding fills the gap that opens between ring and
-            // film with a row ~0.5 spacings from the ring; the ring particles
-            // beside it fall outside the π/6 cone along the axis, so the cone
-            // test took the new row for a rim and its rim force launched it.)
-            // Static rings are left to the cone test: the film of a pinched
-            // catenoid must be able to form a rim at them.
+            // a sheet particle within h of a ring particle is attached to the
+            // ring, not at a free edge, while film lies beside it: it keeps its
+            // codimension. Reseeding fills the gap that opens between a ring and
+            // a film pulled away from it (moving rings, or a film blown into a
+            // bag on a static ring) with a row ~0.5 spacings from the ring; the
+            // ring particles beside it fall outside the π/6 cone along b², so
+            // the cone test took the new row for a rim: its rim force launched
+            // it (moving rings), or it was absorbed into the ring with the film
+            // it had collected, draining the film's mass into the ring until the
+            // film tore there (blowing bubble, docs/decisions.md). At a static
+            // ring the pin holds only while the cone test without the ring
+            // finds film on a side, so a film that has left the ring (a pinched
+            // catenoid's half retracting to it) still ends in a rim there.
             let pinned: Vec<bool> = (0..film.len())
                 .map(|i| {
-                    film.fixed[i]
-                        || (film.codim[i] == Codim::Sheet
-                            && nb.lists.of(i).iter().any(|&q| {
-                                film.fixed[q as usize] && film.v[q as usize].norm() > 0.0
-                            }))
+                    if film.fixed[i] {
+                        return true;
+                    }
+                    if film.codim[i] != Codim::Sheet {
+                        return false;
+                    }
+                    let nbrs = nb.lists.of(i);
+                    let (mut ring, mut moving) = (false, false);
+                    for &q in nbrs {
+                        let q = q as usize;
+                        if film.fixed[q] {
+                            ring = true;
+                            moving |= film.v[q].norm() > 0.0;
+                        }
+                    }
+                    if !ring || moving {
+                        return ring;
+                    }
+                    let free: Vec<u32> = nbrs
+                        .iter()
+                        .copied()
+                        .filter(|&q| !film.fixed[q as usize])
+                        .collect();
+                    let b2: Vec3 = axes[i].column(1).into();
+                    let c = cone_census(
+                        i,
+                        &b2,
+                        tp.sheet_to_filament_angle,
+                        tp.h,
+                        &film.x,
+                        &film.codim,
+                        &free,
+                    );
+                    let (sp, sm) = c.count(&[Codim::Sheet, Codim::Filament]);
+                    sp > 0 || sm > 0
                 })
                 .collect();
             info.transitions = update_codims(
