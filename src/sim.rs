@@ -292,6 +292,7 @@ impl Sim {
                     solids,
                     affine,
                     film,
+                    warm: None,
                 },
                 params,
                 manifest,
@@ -375,6 +376,8 @@ impl Sim {
         let mut substeps = 0;
         let dx = self.scene.domain.dx;
         let film_spacing = film_driver::spacing(&self.scene);
+        // each frame's first coupled solve starts cold: what a resumed run sees
+        self.state.warm = None;
         while self.time < t_end {
             let rem = t_end - self.time;
             let (dt, last) = if self.params.film.is_some() {
@@ -473,6 +476,7 @@ impl Sim {
                 rec.constraint_faces = rec.constraint_faces.max(c.faces);
                 rec.surface = c.counts;
                 rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
+                rec.warm_starts += (c.warm_seeded > 0) as u32;
             }
             rec.liquid_volume = info.liquid_volume;
             rec.liquid_cells = rec.liquid_cells.max(info.pressure.cells);

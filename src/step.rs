@@ -232,6 +232,10 @@ pub struct SimState {
     /// State of the film step (the enclosed gas of a bubble), for scenes
     /// without liquid.
     pub film: Option<FilmState>,
+    /// The previous substep's coupled solution, the next solve's starting
+    /// guess (cleared at the start of every frame, so a resumed run continues
+    /// bit for bit).
+    pub warm: Option<coupling::WarmStart>,
 }
 
 impl SimState {
@@ -243,6 +247,7 @@ impl SimState {
             solids,
             affine: Vec::new(),
             film: None,
+            warm: None,
         }
     }
 }
@@ -359,6 +364,7 @@ pub fn step(
         grid,
         solids,
         affine,
+        warm,
         ..
     } = st;
     // 4: body force
@@ -385,7 +391,7 @@ pub fn step(
     grid.set_inflow(&p.inflow);
     // 7: projection, or with surface tension the coupled solve of §7
     if let Some(cp) = &p.coupling {
-        let c = coupling::solve(grid, solids, particles, cp, dt, p.margin + 1)?;
+        let c = coupling::solve(grid, solids, particles, cp, dt, p.margin + 1, warm)?;
         times.add("mls_operators", c.operators_s);
         times.add("coupled_assembly", c.assemble_s);
         times.add("coupled_factor", c.factor_s);

@@ -23,6 +23,7 @@ pub mod faces;
 pub mod reseed;
 pub mod surface;
 pub mod system;
+pub mod warm;
 
 use crate::grid::extrapolate::{constrain_solids, extrapolate};
 use crate::grid::pcg::{NotFinite, PcgParams};
@@ -38,6 +39,7 @@ use serde::{Deserialize, Serialize};
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
 use system::{assemble, Form, Scalars};
+pub use warm::WarmStart;
 
 /// How the coupled system is solved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -121,6 +123,9 @@ pub struct CouplingInfo {
     pub solve_s: Real,
     /// Ghost-fluid θ clamps.
     pub theta_clamps: usize,
+    /// Unknowns seeded from the previous substep's solution (0: cold start,
+    /// or the seeded guess had the larger residual).
+    pub warm_seeded: usize,
     /// Solves that failed with the chosen method and were redone with the
     /// other one (a counted fallback).
     pub method_fallbacks: usize,
@@ -170,7 +175,8 @@ fn solve_err(stage: &'static str) -> impl Fn(SolveError) -> CouplingError {
 /// Algorithm 1 step 7 with surface tension: solves the coupled system,
 /// writes the projected face velocities into `grid.u` (extended `layers`
 /// layers, free slip in solids) and u^{n+1} into the sheet and filament
-/// particles of `parts`.
+/// particles of `parts`. `warm` holds the previous substep's solution
+/// ([`WarmStart`]); it seeds this solve and is replaced by its solution.
 pub fn solve(
     grid: &mut MacGrid,
     solids: &SolidSet,
@@ -178,6 +184,7 @@ pub fn solve(
     prm: &CouplingParams,
     dt: Real,
     layers: usize,
+    warm: &mut Option<WarmStart>,
 ) -> Result<CouplingInfo, CouplingError> {
     let mut info = CouplingInfo::default();
     let t = Instant::now();
@@ -251,7 +258,18 @@ pub fn solve(
     for (n, form) in order.into_iter().enumerate() {
         let t = if n == 0 { t } else { Instant::now() };
         match solve_form(
-            form, grid, solids, &full, &surf, &k, &vstar, sc, prm, &mut info, t,
+            form,
+            grid,
+            solids,
+            &full,
+            &surf,
+            &k,
+            &vstar,
+            sc,
+            prm,
+            &mut info,
+            t,
+            warm.as_ref(),
         ) {
             Ok(r) => {
                 attempt = Some(r);
@@ -269,7 +287,8 @@ pub fn solve(
             }
         }
     }
-    let (_, sys, x) = attempt.expect("a solve succeeded or returned");
+    let (sys, x, kept) = attempt.expect("a solve succeeded or returned");
+    *warm = Some(kept);
     let q = &x[sys.qo..sys.qo + sys.nq];
     let u: Vec<Vec3> = (0..sys.np)
         .map(|i| {
@@ -348,8 +367,8 @@ fn interior_pressure(full: &Poisson, q: &[Real], dx: Real, sc: Scalars) -> Real 
     }
 }
 
-/// Assembles, factors and solves one form; returns the form, the system
-/// and the solution.
+/// Assembles, factors and solves one form; returns the system, the solution
+/// and the solution kept for the next substep's warm start.
 #[allow(clippy::too_many_arguments)]
 fn solve_form(
     form: Form,
@@ -363,7 +382,8 @@ fn solve_form(
     prm: &CouplingParams,
     info: &mut CouplingInfo,
     t: Instant,
-) -> Result<(Form, system::Assembled, Vec<Real>), CouplingError> {
+    warm: Option<&WarmStart>,
+) -> Result<(system::Assembled, Vec<Real>, WarmStart), CouplingError> {
     let reduced = (form == Form::Reduced)
         .then(|| Poisson::build(grid, solids, |a, s| k.index(a, s).is_some()));
     let sys = assemble(form, reduced.as_ref().unwrap_or(full), surf, k, vstar, sc)
@@ -382,6 +402,16 @@ fn solve_form(
             x[sys.uo + 3 * i + d] = u[d];
         }
     }
+    if let Some(w) = warm {
+        let pois = reduced.as_ref().unwrap_or(full);
+        let mut xw = x.clone();
+        let n = w.seed(grid, pois, k, &sys, sc, &mut xw);
+        if n > 0 && warm::residual_norm(&a, &sys.rhs, &xw) < warm::residual_norm(&a, &sys.rhs, &x)
+        {
+            x = xw;
+            info.warm_seeded = n;
+        }
+    }
     let s = bicgstab(&a, &sys.rhs, &mut x, &ilu, &prm.solver);
     info.solve_s += t.elapsed().as_secs_f64();
     let s = s.map_err(solve_err(match form {
@@ -390,7 +420,8 @@ fn solve_form(
     }))?;
     info.iterations += s.iterations;
     info.rel_residual = s.rel_residual;
-    Ok((form, sys, x))
+    let kept = WarmStart::capture(grid, reduced.as_ref().unwrap_or(full), k, &sys, &x, sc);
+    Ok((sys, x, kept))
 }
 
 /// ‖b − A x‖/‖b‖ of eq. (24) in the monolithic form for a solution given as

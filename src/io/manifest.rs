@@ -147,6 +147,11 @@ pub struct FrameRecord {
     /// last substep, by role.
     #[serde(default)]
     pub surface: crate::coupling::SurfaceCounts,
+    /// Coupled solves of the frame that started from the previous substep's
+    /// solution (every one but the frame's first, unless the seeded guess had
+    /// the larger residual).
+    #[serde(default)]
+    pub warm_starts: u32,
 }
 
 /// The whole manifest.
