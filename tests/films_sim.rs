@@ -6,18 +6,23 @@ use codimfx::sim::{RunOptions, Sim};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-/// The shipped catenoid preset at a coarse resolution (dx × 2.5, ~4k particles).
-fn coarse_catenoid(dir: &Path) -> std::path::PathBuf {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/catenoid.yaml"
-    ))
-    .unwrap();
-    let text = text.replace("dx: 0.00133 ", "dx: 0.003325");
-    assert!(text.contains("dx: 0.003325"), "preset dx line changed");
-    let p = dir.join("catenoid.yaml");
+/// Writes the shipped preset `presets/NAME.yaml` into `dir` with each (from, to)
+/// text replaced (each must occur: a changed preset fails loudly); returns its path.
+fn preset_with(dir: &Path, name: &str, edits: &[(&str, &str)]) -> std::path::PathBuf {
+    let path = format!("{}/presets/{name}.yaml", env!("CARGO_MANIFEST_DIR"));
+    let mut text = std::fs::read_to_string(path).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "preset {name} has no `{from}`");
+        text = text.replace(from, to);
+    }
+    let p = dir.join(format!("{name}.yaml"));
     std::fs::write(&p, text).unwrap();
     p
+}
+
+/// The shipped catenoid preset at a coarse resolution (dx × 2.5, ~4k particles).
+fn coarse_catenoid(dir: &Path) -> std::path::PathBuf {
+    preset_with(dir, "catenoid", &[("dx: 0.00133 ", "dx: 0.003325")])
 }
 
 /// Opens `scene` with its cache under `out`, up to frame `frames`.
@@ -101,15 +106,11 @@ fn film_resume_is_byte_identical() {
 fn bursting_bubble_rim_retracts_at_the_taylor_culick_speed_past_40_ms() {
     // the shipped preset at s = 4 mm (~2.5k particles), 100 ms
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/bursting_bubble.yaml"
-    ))
-    .unwrap();
-    let text = text.replace("dx: 0.0023 ", "dx: 0.012 ");
-    assert!(text.contains("dx: 0.012 "), "preset dx line changed");
-    let scene = tmp.path().join("bubble.yaml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = preset_with(
+        tmp.path(),
+        "bursting_bubble",
+        &[("dx: 0.0023 ", "dx: 0.012 ")],
+    );
     let (r0, sigma, rho, tau): (f64, f64, f64, f64) = (0.0576, 5e-4, 1000.0, 1e-6);
     let v_tc: f64 = (2.0 * sigma / (rho * tau)).sqrt();
     let mut sim = open(&scene, tmp.path(), 6, false);
@@ -186,20 +187,16 @@ fn wind_inflates_the_ring_film_to_the_young_laplace_curvature() {
     // pressure of a film with two faces, 4σ/R: R = 4σ/p = 33.3 mm (> the ring
     // radius, so an equilibrium cap exists; the preset's 1.5 m/s has none).
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/blowing_bubble.yaml"
-    ))
-    .unwrap();
-    let text = text
-        .replace("dx: 0.0012 ", "dx: 0.0036 ")
-        .replace("velocity: [0, 1.5, 0]", "velocity: [0, 1.0, 0]")
-        .replace("gravity: [0, -9.81, 0]", "gravity: [0, 0, 0]")
-        .replace("  thickness: 1.0e-6", "  thickness: 1.0e-6\n  damping: 20");
-    assert!(text.contains("dx: 0.0036 ") && text.contains("damping: 20"));
-    assert!(text.contains("velocity: [0, 1.0, 0]") && text.contains("gravity: [0, 0, 0]"));
-    let scene = tmp.path().join("blowing.yaml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = preset_with(
+        tmp.path(),
+        "blowing_bubble",
+        &[
+            ("dx: 0.0012 ", "dx: 0.0036 "),
+            ("velocity: [0, 1.5, 0]", "velocity: [0, 1.0, 0]"),
+            ("gravity: [0, -9.81, 0]", "gravity: [0, 0, 0]"),
+            ("  thickness: 1.0e-6", "  thickness: 1.0e-6\n  damping: 20"),
+        ],
+    );
     let (a, sigma, rho_air, drag, w): (f64, f64, f64, f64, f64) = (0.0192, 0.01, 1.2, 1.0, 1.0);
     let r_pred = 4.0 * sigma / (drag * rho_air * w * w);
     let mut sim = open(&scene, tmp.path(), 15, false);
@@ -306,15 +303,14 @@ fn preset_wind_blows_a_steady_bag_with_the_young_laplace_apex() {
     // row next to the ring turned into a rim and drained the film into the
     // ring, and the film tore there 10 ms in (docs/presets.md).
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/blowing_bubble.yaml"
-    ))
-    .unwrap();
-    let text = text.replace("dx: 0.0012 ", "dx: 0.0024 ");
-    assert!(text.contains("dx: 0.0024 ") && text.contains("velocity: [0, 1.5, 0]"));
-    let scene = tmp.path().join("blowing.yaml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = preset_with(
+        tmp.path(),
+        "blowing_bubble",
+        &[
+            ("dx: 0.0012 ", "dx: 0.0024 "),
+            ("velocity: [0, 1.5, 0]", "velocity: [0, 1.5, 0]"),
+        ],
+    );
     let (sigma, rho_air, drag, w) = (0.01, 1.2, 1.0, 1.5);
     let r_pred = 4.0 * sigma / (drag * rho_air * w * w);
     let mut sim = open(&scene, tmp.path(), 4, false);

@@ -406,8 +406,7 @@ fn solve_form(
         let pois = reduced.as_ref().unwrap_or(full);
         let mut xw = x.clone();
         let n = w.seed(grid, pois, k, &sys, sc, &mut xw);
-        if n > 0 && warm::residual_norm(&a, &sys.rhs, &xw) < warm::residual_norm(&a, &sys.rhs, &x)
-        {
+        if n > 0 && warm::residual_norm(&a, &sys.rhs, &xw) < warm::residual_norm(&a, &sys.rhs, &x) {
             x = xw;
             info.warm_seeded = n;
         }

@@ -38,7 +38,9 @@ fn key(grid: &MacGrid, s: usize) -> u64 {
 }
 
 fn lookup(list: &[(u64, Real)], k: u64) -> Option<Real> {
-    list.binary_search_by_key(&k, |e| e.0).ok().map(|i| list[i].1)
+    list.binary_search_by_key(&k, |e| e.0)
+        .ok()
+        .map(|i| list[i].1)
 }
 
 impl WarmStart {
