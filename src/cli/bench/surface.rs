@@ -35,6 +35,11 @@ pub struct SurfaceBenchArgs {
     /// Write the outputs (VDB and PLY) to this folder and time that as well.
     #[arg(long)]
     write: Option<std::path::PathBuf>,
+    /// Run the comparison this many times, codimfx and splashsurf alternating (the blob is
+    /// regenerated for each run), and print every ratio with their median: single runs on a
+    /// shared machine scatter by ±5 %.
+    #[arg(long, default_value_t = 1)]
+    repeat: usize,
 }
 
 fn rand01(s: &mut u64) -> f64 {
@@ -231,6 +236,69 @@ fn children_max_rss() -> u64 {
     0
 }
 
+/// Surfaces `frame` once (and writes it when asked); prints the table row (and the stage counts
+/// when `report`); returns (total s, peak RSS bytes of this process, CPU s).
+fn surface_once(
+    frame: ParticleFrame,
+    aniso: bool,
+    radius: f64,
+    n_volume: usize,
+    a: &SurfaceBenchArgs,
+    report: bool,
+) -> Result<(f64, u64, f64)> {
+    let mut o = SurfaceOptions {
+        voxel_size: Some(radius),
+        ..Default::default()
+    };
+    o.aniso.anisotropic = aniso;
+    let t = Instant::now();
+    let cpu0 = cpu_times().0;
+    let g = surfacer::surface_frame(frame, &o)?;
+    let mut total = t.elapsed().as_secs_f64();
+    let mut wt = 0.0;
+    if let Some(dir) = &a.write {
+        std::fs::create_dir_all(dir)?;
+        let t = Instant::now();
+        surfacer::pipeline::write_outputs(dir, 1, &g)?;
+        wt = t.elapsed().as_secs_f64();
+        total += wt;
+    }
+    let cpu = cpu_times().0 - cpu0;
+    let peak = peak_rss("self").unwrap_or(0);
+    let st = &g.stats;
+    let pvol = n_volume as f64 * a.spacing.powi(3);
+    println!(
+        "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {:+.2} % |",
+        if aniso { "anisotropic" } else { "isotropic" },
+        total,
+        st.seconds[0],
+        st.seconds[1],
+        st.seconds[2],
+        st.seconds[3],
+        st.seconds[4],
+        wt,
+        peak as f64 / 1e6,
+        st.leaves,
+        st.active_voxels,
+        st.triangles,
+        100.0 * (g.mesh.volume() / pvol - 1.0)
+    );
+    if report {
+        eprintln!(
+            "  {}: deep kernels {}, band blocks {}, interior blocks {}, grid bytes {:.0} MB, isotropic kernels {}, redistance {:?}, volume shift {:.2e} m",
+            if aniso { "anisotropic" } else { "isotropic" },
+            st.deep_kernels,
+            st.density_blocks,
+            st.interior_blocks,
+            st.grid_bytes as f64 / 1e6,
+            st.isotropic_kernels,
+            st.redistance,
+            st.volume_shift
+        );
+    }
+    Ok((total, peak, cpu))
+}
+
 /// Runs the benchmark and prints a markdown table.
 pub fn run(a: SurfaceBenchArgs) -> Result<()> {
     // large stage buffers go back to the system when freed (surfacer::alloc), as in
@@ -272,90 +340,88 @@ pub fn run(a: SurfaceBenchArgs) -> Result<()> {
     }
     let n_volume = f.codim.iter().filter(|&&c| c == 0).count();
     let mut f = Some(f);
-    let mut ours = (0.0, 0, 0.0);
-    for (m, &aniso) in modes.iter().enumerate() {
-        let frame = if m + 1 == modes.len() {
-            f.take().expect("frame")
-        } else {
-            f.clone().expect("frame")
-        };
-        let mut o = SurfaceOptions {
-            voxel_size: Some(radius),
-            ..Default::default()
-        };
-        o.aniso.anisotropic = aniso;
-        let t = Instant::now();
-        let cpu0 = cpu_times().0;
-        let g = surfacer::surface_frame(frame, &o)?;
-        let mut total = t.elapsed().as_secs_f64();
-        let mut wt = 0.0;
-        if let Some(dir) = &a.write {
-            std::fs::create_dir_all(dir)?;
-            let t = Instant::now();
-            surfacer::pipeline::write_outputs(dir, 1, &g)?;
-            wt = t.elapsed().as_secs_f64();
-            total += wt;
+    // (codimfx wall, codimfx CPU, splashsurf wall, splashsurf CPU) per run; peak memory from the
+    // first run only: this process's high-water mark never falls, and a child's recorded peak
+    // includes its parent's at the spawn (exec keeps the larger of the two)
+    let mut runs: Vec<(f64, f64, f64, f64)> = Vec::new();
+    let mut peaks = (0u64, 0u64);
+    for rep in 0..a.repeat.max(1) {
+        let mut ours = (0.0, 0.0);
+        for (m, &aniso) in modes.iter().enumerate() {
+            let frame = match f.take() {
+                Some(fr) if m + 1 < modes.len() => {
+                    let c = fr.clone();
+                    f = Some(fr);
+                    c
+                }
+                Some(fr) => fr,
+                None => blob(&a),
+            };
+            let (total, peak, cpu) = surface_once(frame, aniso, radius, n_volume, &a, rep == 0)?;
+            if aniso {
+                ours = (total, cpu);
+                if rep == 0 {
+                    peaks.0 = peak;
+                }
+            }
         }
-        let peak = peak_rss("self").unwrap_or(0);
-        let st = &g.stats;
-        let pvol = n_volume as f64 * a.spacing.powi(3);
-        println!(
-            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} | {} | {} | {} | {:+.2} % |",
-            if aniso { "anisotropic" } else { "isotropic" },
-            total,
-            st.seconds[0],
-            st.seconds[1],
-            st.seconds[2],
-            st.seconds[3],
-            st.seconds[4],
-            wt,
-            peak as f64 / 1e6,
-            st.leaves,
-            st.active_voxels,
-            st.triangles,
-            100.0 * (g.mesh.volume() / pvol - 1.0)
-        );
-        eprintln!(
-            "  {}: deep kernels {}, band blocks {}, interior blocks {}, grid bytes {:.0} MB, isotropic kernels {}, redistance {:?}, volume shift {:.2e} m",
-            if aniso { "anisotropic" } else { "isotropic" },
-            st.deep_kernels,
-            st.density_blocks,
-            st.interior_blocks,
-            st.grid_bytes as f64 / 1e6,
-            st.isotropic_kernels,
-            st.redistance,
-            st.volume_shift
-        );
-        if aniso {
-            ours = (total, peak, cpu_times().0 - cpu0);
-        }
-    }
-    match splash {
-        Some(bin) => {
+        if let Some(bin) = &splash {
             let c0 = cpu_times().1;
-            let (ts, ps) = run_splashsurf(&bin, &xyz, radius, &dir)?;
+            let (ts, ps) = run_splashsurf(bin, &xyz, radius, &dir)?;
             let cs = cpu_times().1 - c0;
-            let _ = std::fs::remove_dir_all(&dir);
-            println!(
-                "\nsplashsurf (isotropic): {ts:.2} s, CPU {cs:.2} s, peak RSS {:.0} MB",
-                ps as f64 / 1e6
-            );
-            println!(
-                "codimfx anisotropic: {:.2} s, CPU {:.2} s (user + system, surfacing and writing)",
-                ours.0, ours.2
-            );
-            println!(
-                "codimfx anisotropic / splashsurf: time × {:.2}, CPU × {:.2}, memory × {:.2}",
-                ours.0 / ts,
-                ours.2 / cs.max(0.01),
-                ours.1 as f64 / ps as f64
-            );
-        }
-        None => {
-            let _ = std::fs::remove_dir_all(&dir);
-            println!("\nsplashsurf: not on PATH, comparison skipped (cargo install splashsurf)")
+            if rep == 0 {
+                peaks.1 = ps;
+            }
+            runs.push((ours.0, ours.1, ts, cs));
+        } else {
+            runs.push((ours.0, ours.1, 0.0, 0.0));
         }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+    if splash.is_none() {
+        println!("\nsplashsurf: not on PATH, comparison skipped (cargo install splashsurf)");
+        return Ok(());
+    }
+    for (k, r) in runs.iter().enumerate() {
+        println!(
+            "\nrun {}: splashsurf (isotropic) {:.2} s, CPU {:.2} s; codimfx anisotropic {:.2} s, CPU {:.2} s (user + system, surfacing and writing): time × {:.2}, CPU × {:.2}",
+            k + 1,
+            r.2,
+            r.3,
+            r.0,
+            r.1,
+            r.0 / r.2,
+            r.1 / r.3.max(0.01)
+        );
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(|x, y| x.total_cmp(y));
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        }
+    };
+    let t: Vec<f64> = runs.iter().map(|r| r.0 / r.2).collect();
+    let c: Vec<f64> = runs.iter().map(|r| r.1 / r.3.max(0.01)).collect();
+    let (tmin, tmax) = t
+        .iter()
+        .fold((f64::MAX, 0.0f64), |m, &x| (m.0.min(x), m.1.max(x)));
+    println!(
+        "\npeak RSS (first run): splashsurf {:.0} MB, codimfx {:.0} MB",
+        peaks.1 as f64 / 1e6,
+        peaks.0 as f64 / 1e6
+    );
+    println!(
+        "codimfx anisotropic / splashsurf over {} run(s): time × {:.2} (median; {:.2}–{:.2}), CPU × {:.2} (median), memory × {:.2}",
+        runs.len(),
+        median(t),
+        tmin,
+        tmax,
+        median(c),
+        peaks.0 as f64 / peaks.1 as f64
+    );
     Ok(())
 }
 
