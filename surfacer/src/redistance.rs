@@ -82,14 +82,22 @@ pub fn redistance(
                 }
             })
     };
+    // the signs first: they find each block's seed voxels with bit operations
+    let signs = SignField::new(&d, iso);
     // seeds per block (each list sized exactly: no doubling of one large vector)
     let seeds: Vec<Vec<(Entry, bool)>> = d
         .blocks
         .par_iter()
         .enumerate()
         .filter(|(bi, _)| !no_seeds(*bi))
-        .map(|(_, b)| {
+        .map(|(bi, b)| {
             let mut out = Vec::new();
+            // voxels with a 6-neighbour on the other side of the iso-value
+            let cand = crossings(&signs.blocks[bi].1, &|a, s| {
+                let mut q = b.origin;
+                q[a] += 8 * s;
+                signs.mask(q)
+            });
             // the six face-neighbour blocks (slot 2a + (s > 0)), or their tile value
             let face: [(Option<&crate::density::DensityBlock>, f32); 6] =
                 std::array::from_fn(|q| {
@@ -107,7 +115,7 @@ pub fn redistance(
                     (None, t) => t,
                 }
             };
-            for n in 0..LEAF_SIZE {
+            for n in (0..LEAF_SIZE).filter(|&n| cand[n >> 6] >> (n & 63) & 1 == 1) {
                 let ijk = voxel_of(b.origin, n);
                 let f = b.f[n];
                 let ins = f >= iso;
@@ -170,7 +178,6 @@ pub fn redistance(
         .filter(|v| !v.is_empty())
         .collect();
     info.seeds = seeds.iter().map(|v| v.len()).sum();
-    let signs = SignField::new(&d, iso);
     drop(d);
     let mask = |o: Key| signs.mask(o);
     info.flat_gradient = seeds
@@ -507,6 +514,29 @@ const Z0: u64 = 0x0101_0101_0101_0101;
 /// Bits of an x-word on the y or z faces of a leaf (y = 0, y = 7, z = 0, z = 7).
 const FACE_YZ: u64 = 0xFF | (0xFF << 56) | Z0 | Z7;
 const Z7: u64 = 0x8080_8080_8080_8080;
+
+/// The voxels of a leaf-sized block whose inside bit (`m`, layout word x, bit 8y + z) differs
+/// from one of its six face neighbours'; `nb(a, s)` gives the mask of the neighbour block one
+/// block away along axis a in direction s = ±1.
+fn crossings(m: &[u64; 8], nb: &impl Fn(usize, i32) -> [u64; 8]) -> [u64; 8] {
+    const Y0: u64 = 0xFF;
+    const Y7: u64 = 0xFF << 56;
+    let (xm, xp) = (nb(0, -1), nb(0, 1));
+    let (ym, yp) = (nb(1, -1), nb(1, 1));
+    let (zm, zp) = (nb(2, -1), nb(2, 1));
+    let mut out = [0u64; 8];
+    for x in 0..8 {
+        let w = m[x];
+        let lo_x = if x == 0 { xm[7] } else { m[x - 1] };
+        let hi_x = if x == 7 { xp[0] } else { m[x + 1] };
+        let lo_y = ((w << 8) & !Y0) | (ym[x] >> 56);
+        let hi_y = ((w >> 8) & !Y7) | ((yp[x] & Y0) << 56);
+        let lo_z = ((w << 1) & !Z0) | ((zm[x] & Z7) >> 7);
+        let hi_z = ((w >> 1) & !Z7) | ((zp[x] & Z0) << 7);
+        out[x] = (w ^ lo_x) | (w ^ hi_x) | (w ^ lo_y) | (w ^ hi_y) | (w ^ lo_z) | (w ^ hi_z);
+    }
+    out
+}
 
 /// Dilates a leaf's voxel mask by one voxel in all 26 directions, including the contributions of
 /// the 26 neighbouring leaves. `mask(s)` gives the mask of the neighbour at slot
