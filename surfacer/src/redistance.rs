@@ -363,6 +363,9 @@ pub fn redistance(
                 // candidates: the front dilated by one voxel (26-neighbourhood), minus set voxels
                 let front_of = |s: usize| -> [u64; 8] { nb[s].map_or([0; 8], |j| fr[j]) };
                 let dil = dilate26(&front_of);
+                // the front bits of the leaf padded by one voxel, built on the first candidate
+                // on a leaf face: row (x + 1)·10 + y + 1 for x, y in −1..=8, bit z + 1
+                let mut pad: Option<[u16; 100]> = None;
                 let mut out = Vec::new();
                 let mut sign: Option<[u64; 8]> = None;
                 // candidates in index order (word x, bit 8y + z)
@@ -400,17 +403,19 @@ pub fn redistance(
                                 }
                             }
                         } else {
+                            // only front neighbours can win (as above); the same (dx, dy, dz)
+                            // order as the interior case
+                            let pad = pad.get_or_insert_with(|| padded_front(&front_of));
                             for dx in -1..=1 {
                                 for dy in -1..=1 {
-                                    for dz in -1..=1 {
-                                        let Some((j, m)) = at([k[0] + dx, k[1] + dy, k[2] + dz])
-                                        else {
-                                            continue;
-                                        };
-                                        // only front neighbours can win (as above)
-                                        if fr[j][m >> 6] >> (m & 63) & 1 == 1 {
-                                            consider(&g.leaves[j], m, [dx, dy, dz]);
-                                        }
+                                    let row = pad[((k[0] + dx + 1) * 10 + k[1] + dy + 1) as usize];
+                                    let mut bits = (row >> k[2]) & 0b111;
+                                    while bits != 0 {
+                                        let dz = bits.trailing_zeros() as i32 - 1;
+                                        bits &= bits - 1;
+                                        let (j, m) = at([k[0] + dx, k[1] + dy, k[2] + dz])
+                                            .expect("a front voxel lies in an existing leaf");
+                                        consider(&g.leaves[j], m, [dx, dy, dz]);
                                     }
                                 }
                             }
@@ -514,6 +519,26 @@ const Z0: u64 = 0x0101_0101_0101_0101;
 /// Bits of an x-word on the y or z faces of a leaf (y = 0, y = 7, z = 0, z = 7).
 const FACE_YZ: u64 = 0xFF | (0xFF << 56) | Z0 | Z7;
 const Z7: u64 = 0x8080_8080_8080_8080;
+
+/// The front bits of a leaf and its 26 neighbours (`front(s)`, slot s = (dx+1)·9 + (dy+1)·3 +
+/// dz+1, layout word x, bit 8y + z) on the padded 10³ block around the leaf: entry
+/// (x + 1)·10 + y + 1 for x, y in −1..=8 holds bit z + 1 for z in −1..=8.
+fn padded_front(front: &impl Fn(usize) -> [u64; 8]) -> [u16; 100] {
+    let masks: [[u64; 8]; 27] = std::array::from_fn(front);
+    let side = |v: i32| if v < 0 { 0 } else if v > 7 { 2 } else { 1 };
+    let mut pad = [0u16; 100];
+    for x in -1..=8i32 {
+        for y in -1..=8i32 {
+            let sl = (side(x) * 9 + side(y) * 3) as usize;
+            let (w, sh) = ((x & 7) as usize, 8 * (y & 7) as u32);
+            let lo = (masks[sl][w] >> (sh + 7)) & 1;
+            let mid = (masks[sl + 1][w] >> sh) & 0xFF;
+            let hi = (masks[sl + 2][w] >> sh) & 1;
+            pad[((x + 1) * 10 + y + 1) as usize] = (lo | (mid << 1) | (hi << 9)) as u16;
+        }
+    }
+    pad
+}
 
 /// The voxels of a leaf-sized block whose inside bit (`m`, layout word x, bit 8y + z) differs
 /// from one of its six face neighbours'; `nb(a, s)` gives the mask of the neighbour block one
