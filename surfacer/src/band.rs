@@ -44,28 +44,41 @@ pub fn smooth_band(
                         ins[sl] = inside(q);
                     }
                 }
+                // row by row: the 8 voxels of a row inside the leaf's z range come from one
+                // neighbour (a copy when it is a leaf), the two padding voxels from the z
+                // neighbours
+                let side = |v: i32| {
+                    if v < 0 {
+                        0
+                    } else if v > 7 {
+                        2
+                    } else {
+                        1
+                    }
+                };
+                let value = |sl: usize, m: usize| -> f32 {
+                    match nb[sl] {
+                        Some(j) => g.leaves[j].phi[m],
+                        None if ins[sl][m >> 6] >> (m & 63) & 1 == 1 => -bg,
+                        None => bg,
+                    }
+                };
                 for x in -1..9i32 {
                     for y in -1..9i32 {
-                        for z in -1..9i32 {
-                            let s = |v: i32| {
-                                if v < 0 {
-                                    0
-                                } else if v > 7 {
-                                    2
-                                } else {
-                                    1
+                        let sl = (side(x) * 9 + side(y) * 3) as usize;
+                        let base = voxel_index([x & 7, y & 7, 0]);
+                        let row = (((x + 1) * 10 + y + 1) * 10) as usize;
+                        p[row] = value(sl, base + 7);
+                        match nb[sl + 1] {
+                            Some(j) => p[row + 1..row + 9]
+                                .copy_from_slice(&g.leaves[j].phi[base..base + 8]),
+                            None => {
+                                for z in 0..8 {
+                                    p[row + 1 + z] = value(sl + 1, base + z);
                                 }
-                            };
-                            let sl = (s(x) * 9 + s(y) * 3 + s(z)) as usize;
-                            let k = [o[0] + x, o[1] + y, o[2] + z];
-                            let m = voxel_index(k);
-                            let v = match nb[sl] {
-                                Some(j) => g.leaves[j].phi[m],
-                                None if ins[sl][m >> 6] >> (m & 63) & 1 == 1 => -bg,
-                                None => bg,
-                            };
-                            p[(((x + 1) * 10 + y + 1) * 10 + z + 1) as usize] = v;
+                            }
                         }
+                        p[row + 9] = value(sl + 2, base);
                     }
                 }
                 let at = |x: usize, y: usize, z: usize| (x * 10 + y) * 10 + z;

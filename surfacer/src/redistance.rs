@@ -525,7 +525,15 @@ const Z7: u64 = 0x8080_8080_8080_8080;
 /// (x + 1)·10 + y + 1 for x, y in −1..=8 holds bit z + 1 for z in −1..=8.
 fn padded_front(front: &impl Fn(usize) -> [u64; 8]) -> [u16; 100] {
     let masks: [[u64; 8]; 27] = std::array::from_fn(front);
-    let side = |v: i32| if v < 0 { 0 } else if v > 7 { 2 } else { 1 };
+    let side = |v: i32| {
+        if v < 0 {
+            0
+        } else if v > 7 {
+            2
+        } else {
+            1
+        }
+    };
     let mut pad = [0u16; 100];
     for x in -1..=8i32 {
         for y in -1..=8i32 {
