@@ -104,6 +104,10 @@ fn main() {
             kr += p.mass[i] * (as_ * dxi).norm_squared();
         }
         let c = info.coupling.as_ref().unwrap();
+        // Rayleigh's A(t) = −e ω sin(ωt) / 2 for the same initial deformation
+        let w = 2.0 * std::f64::consts::PI / case.rayleigh_period();
+        let a_ray = -0.05 * w * (w * t).sin() / 2.0;
+        print!("An/A_rayleigh={:.3} ", an / a_ray);
         print!("{:2} {:.2} As={:+.4e} An={:+.4e} Atop={:+.4e} Ad={:+.4e} KE/KE(As)={:.3} KE/KE(An)={:.3} it={} |", n + 1, t, as_, an, atop, ad, ke / kr, ke / kr * (as_ / an).powi(2), c.iterations);
         for b in 0..nb {
             if bd[b] > 0.0 {
