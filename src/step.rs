@@ -196,6 +196,10 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             crate::scene::FaceMassSetting::Sheet => coupling::FaceMass::Sheet,
             crate::scene::FaceMassSetting::LevelSet => coupling::FaceMass::LevelSet,
         },
+        band: match s.coupling.band {
+            crate::scene::BandSetting::Sheet => coupling::BandVelocity::Sheet,
+            crate::scene::BandSetting::Extrapolated => coupling::BandVelocity::Extrapolated,
+        },
         surface_radius: s.solver.surface_radius,
         transitions: s.film.transitions.then(|| TransitionParams::paper(h)),
         reseed: s.film.reseed.then(|| crate::reseed::ReseedParams::paper(h)),

@@ -66,6 +66,20 @@ pub enum FaceMass {
     LevelSet,
 }
 
+/// Which velocity a constraint face is held to (eq. 18's K v = K J u).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum BandVelocity {
+    /// (J u)_f: the sheet velocity interpolated onto the face, whatever the
+    /// face's distance from the sheet.
+    Sheet,
+    /// (J u)_f plus the change of the liquid's velocity along the sheet
+    /// normal from each sheet particle to the face, read from the liquid
+    /// below the band one substep earlier ([`band_correction`]).
+    #[default]
+    Extrapolated,
+}
+
 /// Parameters of the coupled solve.
 #[derive(Clone, Debug)]
 pub struct CouplingParams {
@@ -87,6 +101,8 @@ pub struct CouplingParams {
     pub sources: Vec<codim::Source>,
     /// Mass of the constraint faces.
     pub face_mass: FaceMass,
+    /// Velocity the constraint faces are held to.
+    pub band: BandVelocity,
     /// Level-set radius of the volume particles (× Δx), `solver.surface_radius`.
     pub surface_radius: Real,
     /// Also evaluate the residual of the full eq. (24) for the solution
@@ -248,7 +264,15 @@ pub fn solve(
         info.solve_s = t.elapsed().as_secs_f64();
         return Ok(info);
     }
-    let vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
+    let mut vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
+    // K v = K (J u + c): in the face rows, v** − c takes the place of v**
+    let band = match prm.band {
+        BandVelocity::Extrapolated => band_correction(grid, &surf, &k),
+        BandVelocity::Sheet => vec![0.0; k.len()],
+    };
+    for (v, c) in vstar.iter_mut().zip(&band) {
+        *v -= c;
+    }
     // the chosen method; if its solve fails, the other one (counted)
     let order = match prm.method {
         Method::Monolithic => [Form::Monolithic, Form::Reduced],
@@ -265,6 +289,7 @@ pub fn solve(
             &surf,
             &k,
             &vstar,
+            &band,
             sc,
             prm,
             &mut info,
@@ -338,6 +363,66 @@ pub fn solve(
     Ok(info)
 }
 
+/// c_f = Σ_i J_fi ((x_f − x_i)·n_i) (∂u_a/∂n)_i for each constraint face f of
+/// axis a: how much the velocity changes along the sheet normal between
+/// the sheet particles and the face ([`BandVelocity::Extrapolated`]).
+///
+/// (∂u/∂n)_i is a one-sided difference of v** (the grid velocity before the
+/// solve: u^n carried by the particles, so the correction lags one substep)
+/// between the particle and the point [`BAND_PROBE`] Δx inside the liquid
+/// along its normal, past the band of constraint faces: inside the band the
+/// grid's normal derivative is the constraint's own (zero with c = 0), so it
+/// must be read from the free liquid below. The normal is oriented by the
+/// liquid level set. A particle whose probe point is not at least Δx/2
+/// inside the liquid (a body thinner than the probe depth), and every free
+/// sheet, keeps c = 0 (the sheet's own velocity).
+pub fn band_correction(
+    grid: &MacGrid,
+    surf: &surface::Surface,
+    k: &faces::Constraints,
+) -> Vec<Real> {
+    use rayon::prelude::*;
+    let d = BAND_PROBE * grid.dx;
+    let phi_at = |y: &Vec3| {
+        let c = grid.cell_of(y);
+        grid.slot(c[0], c[1], c[2])
+            .map_or(Real::MAX, |s| grid.phi[s])
+    };
+    let dudn: Vec<Option<(Vec3, Vec3)>> = (0..surf.n_sheet())
+        .into_par_iter()
+        .map(|i| {
+            if !surf.attached[i] {
+                return None;
+            }
+            let x = surf.nb.x[i];
+            let n: Vec3 = surf.axes[i].column(2).into();
+            let (lo, hi) = (phi_at(&(x - d * n)), phi_at(&(x + d * n)));
+            let (n, inner) = if lo <= hi { (n, lo) } else { (-n, hi) };
+            (inner < -0.5 * grid.dx)
+                .then(|| (n, (grid.velocity(&x) - grid.velocity(&(x - d * n))) / d))
+        })
+        .collect();
+    (0..k.len())
+        .into_par_iter()
+        .map(|f| {
+            let (a, s) = k.faces[f];
+            let xf = grid.face_pos(s, a);
+            k.row(f)
+                .map(|(i, j)| match &dudn[i] {
+                    Some((n, g)) => j * n.dot(&(xf - surf.nb.x[i])) * g[a],
+                    None => 0.0,
+                })
+                .sum()
+        })
+        .collect()
+}
+
+/// Depth (× Δx) below a sheet particle at which [`band_correction`] reads
+/// the liquid's velocity: past the band of constraint faces, which reaches
+/// about Δx inside the sheet. 1.5, 2 and 3 gave the same period within
+/// 0.5 points (`docs/decisions.md`).
+pub const BAND_PROBE: Real = 2.0;
+
 /// Spacing (m) of the volume particles, (m̄/ρ)^{1/3} from their mean mass;
 /// `None` without volume particles.
 fn volume_spacing(parts: &Particles, density: Real) -> Option<Real> {
@@ -378,6 +463,7 @@ fn solve_form(
     surf: &surface::Surface,
     k: &faces::Constraints,
     vstar: &[Real],
+    band: &[Real],
     sc: Scalars,
     prm: &CouplingParams,
     info: &mut CouplingInfo,
@@ -386,8 +472,16 @@ fn solve_form(
 ) -> Result<(system::Assembled, Vec<Real>, WarmStart), CouplingError> {
     let reduced = (form == Form::Reduced)
         .then(|| Poisson::build(grid, solids, |a, s| k.index(a, s).is_some()));
-    let sys = assemble(form, reduced.as_ref().unwrap_or(full), surf, k, vstar, sc)
-        .map_err(solve_err("coupled system assembly"))?;
+    let sys = assemble(
+        form,
+        reduced.as_ref().unwrap_or(full),
+        surf,
+        k,
+        vstar,
+        band,
+        sc,
+    )
+    .map_err(solve_err("coupled system assembly"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
     info.unknowns = a.nrows;
     info.nonzeros = a.val.len();
@@ -436,8 +530,16 @@ fn eq24_residual(
     u: &[Vec3],
     mu: &[Real],
 ) -> Result<Real, CouplingError> {
-    let sys = assemble(Form::Monolithic, full, surf, k, vstar, sc)
-        .map_err(solve_err("eq. (24) residual"))?;
+    let sys = assemble(
+        Form::Monolithic,
+        full,
+        surf,
+        k,
+        vstar,
+        &vec![0.0; k.len()],
+        sc,
+    )
+    .map_err(solve_err("eq. (24) residual"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
     let mut x = vec![0.0; a.nrows];
     x[..sys.nq].copy_from_slice(q);

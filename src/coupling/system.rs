@@ -126,7 +126,10 @@ fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> 
 
 /// Assembles the chosen form. `sys` is the pressure system built without
 /// (monolithic) or with (reduced) the constraint faces skipped; `vstar`
-/// holds v**_f of each constraint face.
+/// holds v**_f − c_f of each constraint face, where the face is held to
+/// (J u)_f + c_f, and `band` holds c_f: the reduced form's cell rows carry
+/// the constraint faces' flux w_f((J u)_f + c_f), so c enters their
+/// right-hand side (the monolithic form needs only v** − c).
 ///
 /// Unknown order: monolithic [q, u, μ] as eq. (24) writes it; reduced
 /// [u, q], so that ILU(0) meets the particle pivots first and the cells
@@ -139,6 +142,7 @@ pub fn assemble(
     surf: &Surface,
     k: &Constraints,
     vstar: &[Real],
+    band: &[Real],
     sc: Scalars,
 ) -> Result<Assembled, SolveError> {
     let nq = sys.a.len();
@@ -226,6 +230,7 @@ pub fn assemble(
             Form::Reduced => {
                 let th = mono_theta(k, f);
                 for (c, s) in face_cells(k, f) {
+                    rhs[qo + c] -= s * w * band[f];
                     for (i, j) in k.row(f) {
                         let r = uo + 3 * i + a;
                         t.push(Triplet::new(qo + c, r, s * w * j));

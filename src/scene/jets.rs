@@ -63,6 +63,22 @@ pub struct CouplingSettings {
     /// pressure solve's level set, which reaches past it).
     #[serde(default)]
     pub face_mass: FaceMassSetting,
+    /// Velocity the constraint faces are held to: `extrapolated` (the
+    /// sheet's velocity carried to the face with its gradient, completed
+    /// as an incompressible irrotational flow) or `sheet` (the sheet's own).
+    #[serde(default)]
+    pub band: BandSetting,
+}
+
+/// `coupling.band`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum BandSetting {
+    /// The sheet's interpolated velocity.
+    Sheet,
+    /// Carried to the face with the sheet's velocity gradient (default).
+    #[default]
+    Extrapolated,
 }
 
 /// `coupling.face_mass`.
@@ -83,6 +99,7 @@ impl Default for CouplingSettings {
             max_iterations: default_max_iterations(),
             method: CouplingMethod::Monolithic,
             face_mass: FaceMassSetting::Sheet,
+            band: BandSetting::Extrapolated,
         }
     }
 }

@@ -11,7 +11,7 @@
 //! `surface_radius` Δx around the volume particles (see `docs/decisions.md`
 //! for its effect on the Young–Laplace jump and on the oscillation).
 
-use crate::coupling::{FaceMass, Method};
+use crate::coupling::{BandVelocity, FaceMass, Method};
 use crate::grid::MacGrid;
 use crate::math::{Real, Vec3};
 use crate::particles::Codim;
@@ -35,6 +35,8 @@ pub struct DropletCase {
     pub method: Method,
     /// Mass of the constraint faces.
     pub face_mass: FaceMass,
+    /// Velocity the constraint faces are held to.
+    pub band: BandVelocity,
     /// Relative elongation e along y of the l = 2 ellipsoid (volume
     /// preserving: y × (1 + e), x and z × (1 + e)^{-1/2}); 0 for a sphere.
     pub elongation: Real,
@@ -50,6 +52,7 @@ impl DropletCase {
             surface_radius: 1.0,
             method: Method::Monolithic,
             face_mass: FaceMass::Sheet,
+            band: BandVelocity::default(),
             elongation: 0.0,
         }
     }
@@ -98,6 +101,7 @@ impl DropletCase {
         let mut cp = coupling_params(&scene);
         cp.method = self.method;
         cp.face_mass = self.face_mass;
+        cp.band = self.band;
         prm.coupling = Some(cp);
         let grid = MacGrid::new(prm.lo, prm.hi, dx);
         Ok((SimState::new(parts, grid, solids), prm))

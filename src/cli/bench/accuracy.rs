@@ -7,7 +7,7 @@
 use super::operators::{plot, Point};
 use anyhow::Result;
 use clap::Args;
-use codimfx::coupling::FaceMass;
+use codimfx::coupling::{BandVelocity, FaceMass};
 use codimfx::validate::droplet::{oscillate, DropletCase};
 use codimfx::Real;
 use std::path::PathBuf;
@@ -28,6 +28,11 @@ pub struct AccuracyArgs {
     /// layer) or `level-set`.
     #[arg(long, value_enum, default_value_t = FaceMassArg::Sheet)]
     face_mass: FaceMassArg,
+    /// Velocity of the constraint faces: `extrapolated` (the sheet's
+    /// velocity carried to the face with its gradient) or `sheet` (the
+    /// sheet's own).
+    #[arg(long, value_enum, default_value_t = BandArg::Extrapolated)]
+    band: BandArg,
     /// Solve the coupled system with λ eliminated (the Schur form).
     #[arg(long)]
     schur: bool,
@@ -45,12 +50,21 @@ pub enum FaceMassArg {
     LevelSet,
 }
 
+/// `--band`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum BandArg {
+    /// The sheet's own velocity.
+    Sheet,
+    /// Carried to the face with the sheet's velocity gradient.
+    Extrapolated,
+}
+
 /// Runs the benchmark and prints a markdown table.
 pub fn run(a: AccuracyArgs) -> Result<()> {
     println!("threads: {}\n", rayon::current_num_threads());
     println!(
-        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?})\n",
-        a.surface_radius, a.face_mass
+        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, band {:?})\n",
+        a.surface_radius, a.face_mass, a.band
     );
     println!(
         "| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | wall (s) |"
@@ -64,6 +78,10 @@ pub fn run(a: AccuracyArgs) -> Result<()> {
                 face_mass: match a.face_mass {
                     FaceMassArg::Sheet => FaceMass::Sheet,
                     FaceMassArg::LevelSet => FaceMass::LevelSet,
+                },
+                band: match a.band {
+                    BandArg::Sheet => BandVelocity::Sheet,
+                    BandArg::Extrapolated => BandVelocity::Extrapolated,
                 },
                 method: if a.schur {
                     codimfx::coupling::Method::Schur

@@ -1,0 +1,35 @@
+//! Resting droplet at R = 4Δx, Δt = 0.01 s, 1 s: largest particle speed
+//! and interior pressure against 2σ/R, for both band velocities.
+use codimfx::coupling::BandVelocity;
+use codimfx::math::Real;
+use codimfx::step::{step, StageTimes};
+use codimfx::validate::droplet::DropletCase;
+
+fn main() {
+    let cells: Real = std::env::args().nth(1).map_or(4.0, |s| s.parse().unwrap());
+    let n: usize = std::env::args().nth(2).map_or(100, |s| s.parse().unwrap());
+    for band in [BandVelocity::Sheet, BandVelocity::Extrapolated] {
+        let case = DropletCase {
+            band,
+            ..DropletCase::paper(cells)
+        };
+        let (mut st, prm) = case.build().unwrap();
+        let t = std::time::Instant::now();
+        let (mut it, mut p, mut vmax) = (0usize, 0.0, 0.0);
+        for k in 0..n {
+            let info = step(&mut st, &prm, 0.01, &mut StageTimes::default()).unwrap();
+            let c = info.coupling.unwrap();
+            it += c.iterations;
+            if k == 0 {
+                p = c.interior_pressure;
+            }
+            vmax = st.particles.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+        }
+        println!(
+            "{band:?}: R = {cells}Δx, first-step p/(2σ/R) − 1 = {:+.2} %, max speed after {n} steps {vmax:.3e} m/s, mean iterations {:.0}, wall {:.1} s",
+            100.0 * (p / case.young_laplace() - 1.0),
+            it as Real / n as Real,
+            t.elapsed().as_secs_f64()
+        );
+    }
+}
