@@ -39,6 +39,7 @@ use serde::{Deserialize, Serialize};
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
 use system::{assemble, Form, Scalars};
+pub use system::IluOrder;
 pub use warm::WarmStart;
 
 /// How the coupled system is solved.
@@ -73,6 +74,8 @@ pub struct CouplingParams {
     pub method: Method,
     /// BiCGSTAB stopping rule (paper: 1e-9 relative).
     pub solver: BicgstabParams,
+    /// Order of the monolithic system's unknowns for ILU(0).
+    pub ilu_order: IluOrder,
     /// Particle side.
     pub surface: SurfaceParams,
     /// Pressure PCG rule, used when there are no constraint faces.
@@ -293,9 +296,9 @@ pub fn solve(
     let u: Vec<Vec3> = (0..sys.np)
         .map(|i| {
             Vec3::new(
-                x[sys.uo + 3 * i],
-                x[sys.uo + 3 * i + 1],
-                x[sys.uo + 3 * i + 2],
+                x[sys.u_row(i, 0)],
+                x[sys.u_row(i, 1)],
+                x[sys.u_row(i, 2)],
             )
         })
         .collect();
@@ -386,8 +389,16 @@ fn solve_form(
 ) -> Result<(system::Assembled, Vec<Real>, WarmStart), CouplingError> {
     let reduced = (form == Form::Reduced)
         .then(|| Poisson::build(grid, solids, |a, s| k.index(a, s).is_some()));
-    let sys = assemble(form, reduced.as_ref().unwrap_or(full), surf, k, vstar, sc)
-        .map_err(solve_err("coupled system assembly"))?;
+    let sys = assemble(
+        form,
+        reduced.as_ref().unwrap_or(full),
+        surf,
+        k,
+        vstar,
+        sc,
+        prm.ilu_order,
+    )
+    .map_err(solve_err("coupled system assembly"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
     info.unknowns = a.nrows;
     info.nonzeros = a.val.len();
@@ -399,7 +410,7 @@ fn solve_form(
     let mut x = vec![0.0; a.nrows];
     for (i, u) in surf.u.iter().enumerate() {
         for d in 0..3 {
-            x[sys.uo + 3 * i + d] = u[d];
+            x[sys.u_row(i, d)] = u[d];
         }
     }
     if let Some(w) = warm {
@@ -437,14 +448,14 @@ fn eq24_residual(
     u: &[Vec3],
     mu: &[Real],
 ) -> Result<Real, CouplingError> {
-    let sys = assemble(Form::Monolithic, full, surf, k, vstar, sc)
+    let sys = assemble(Form::Monolithic, full, surf, k, vstar, sc, IluOrder::Equation)
         .map_err(solve_err("eq. (24) residual"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
     let mut x = vec![0.0; a.nrows];
-    x[..sys.nq].copy_from_slice(q);
+    x[sys.qo..sys.qo + sys.nq].copy_from_slice(q);
     for (i, v) in u.iter().enumerate() {
         for d in 0..3 {
-            x[sys.uo + 3 * i + d] = v[d];
+            x[sys.u_row(i, d)] = v[d];
         }
     }
     for f in 0..k.len() {

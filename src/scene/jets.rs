@@ -63,6 +63,11 @@ pub struct CouplingSettings {
     /// pressure solve's level set, which reaches past it).
     #[serde(default)]
     pub face_mass: FaceMassSetting,
+    /// Order of the monolithic system's unknowns for ILU(0): `equation`
+    /// ([q, u, λ] as eq. 24 writes it) or `particles_first` ([u, λ, q], the
+    /// particles in reverse Cuthill–McKee order).
+    #[serde(default)]
+    pub ordering: crate::coupling::IluOrder,
 }
 
 /// `coupling.face_mass`.
@@ -83,6 +88,7 @@ impl Default for CouplingSettings {
             max_iterations: default_max_iterations(),
             method: CouplingMethod::Monolithic,
             face_mass: FaceMassSetting::Sheet,
+            ordering: crate::coupling::IluOrder::default(),
         }
     }
 }
