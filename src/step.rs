@@ -169,6 +169,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             CouplingMethod::Schur => Method::Schur,
         },
         ilu_order: s.coupling.ordering,
+        face_fill: s.coupling.face_fill,
         solver: BicgstabParams {
             tol: s.coupling.tolerance,
             max_iter: s.coupling.max_iterations as usize,

@@ -76,6 +76,8 @@ pub struct CouplingParams {
     pub solver: BicgstabParams,
     /// Order of the monolithic system's unknowns for ILU(0).
     pub ilu_order: IluOrder,
+    /// Keep the λ–λ fill of the particle rows in ILU(0)'s pattern.
+    pub face_fill: bool,
     /// Particle side.
     pub surface: SurfaceParams,
     /// Pressure PCG rule, used when there are no constraint faces.
@@ -397,6 +399,7 @@ fn solve_form(
         vstar,
         sc,
         prm.ilu_order,
+        prm.face_fill,
     )
     .map_err(solve_err("coupled system assembly"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
@@ -448,7 +451,16 @@ fn eq24_residual(
     u: &[Vec3],
     mu: &[Real],
 ) -> Result<Real, CouplingError> {
-    let sys = assemble(Form::Monolithic, full, surf, k, vstar, sc, IluOrder::Equation)
+    let sys = assemble(
+        Form::Monolithic,
+        full,
+        surf,
+        k,
+        vstar,
+        sc,
+        IluOrder::Equation,
+        false,
+    )
         .map_err(solve_err("eq. (24) residual"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
     let mut x = vec![0.0; a.nrows];

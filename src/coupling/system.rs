@@ -157,8 +157,12 @@ fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> 
 /// Cuthill–McKee order ([`IluOrder::ParticlesFirst`]); reduced [u, q], so
 /// that ILU(0) meets the particle pivots first and the cells whose every
 /// face is a constraint face (a zero diagonal in A') receive their pivot
-/// from the eliminated particle block. The order changes which
-/// incomplete factorisation ILU(0) computes, not the system.
+/// from the eliminated particle block. With `face_fill` the monolithic
+/// matrix also stores explicit zeros between the constraint faces of one
+/// axis that share a free particle: the λ–λ fill that eliminating the
+/// particle rows creates, which ILU(0) then keeps (ILU with one level of
+/// fill in the λ block). Neither changes the system, only the incomplete
+/// factorisation ILU(0) computes.
 #[allow(clippy::needless_range_loop)]
 pub fn assemble(
     form: Form,
@@ -168,6 +172,7 @@ pub fn assemble(
     vstar: &[Real],
     sc: Scalars,
     order: IluOrder,
+    face_fill: bool,
 ) -> Result<Assembled, SolveError> {
     let nq = sys.a.len();
     let np = surf.len();
@@ -281,6 +286,32 @@ pub fn assemble(
                     rhs[r] -= ji * w * th * vstar[f];
                     for (jdx, jj) in k.row(f) {
                         t.push(Triplet::new(r, ur(jdx, a), -ji * w * th * jj));
+                    }
+                }
+            }
+        }
+    }
+    if form == Form::Monolithic && face_fill {
+        // explicit zeros where eliminating a particle row fills the λ block:
+        // faces of one axis that share a (free) particle
+        let mut faces_of: Vec<Vec<usize>> = vec![Vec::new(); 3 * np];
+        for f in 0..k.len() {
+            let a = k.faces[f].0;
+            for (i, _) in k.row(f) {
+                if !surf.fixed[i] {
+                    faces_of[3 * i + a].push(f);
+                }
+            }
+        }
+        let mut seen = vec![usize::MAX; k.len()];
+        for f in 0..k.len() {
+            let a = k.faces[f].0;
+            seen[f] = f;
+            for (i, _) in k.row(f) {
+                for &g in &faces_of[3 * i + a] {
+                    if seen[g] != f {
+                        seen[g] = f;
+                        t.push(Triplet::new(mo + f, mo + g, 0.0));
                     }
                 }
             }

@@ -68,6 +68,15 @@ pub struct CouplingSettings {
     /// particles in reverse Cuthill–McKee order).
     #[serde(default)]
     pub ordering: crate::coupling::IluOrder,
+    /// Keep in ILU(0)'s pattern the impulse–impulse entries that
+    /// eliminating the particle rows fills in (faces of one axis sharing a
+    /// particle); the stored values are zeros, the system is unchanged.
+    #[serde(default = "default_face_fill")]
+    pub face_fill: bool,
+}
+
+fn default_face_fill() -> bool {
+    true
 }
 
 /// `coupling.face_mass`.
@@ -89,6 +98,7 @@ impl Default for CouplingSettings {
             method: CouplingMethod::Monolithic,
             face_mass: FaceMassSetting::Sheet,
             ordering: crate::coupling::IluOrder::default(),
+            face_fill: default_face_fill(),
         }
     }
 }
