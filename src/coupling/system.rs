@@ -163,7 +163,7 @@ fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> 
 /// particle rows creates, which ILU(0) then keeps (ILU with one level of
 /// fill in the λ block). Neither changes the system, only the incomplete
 /// factorisation ILU(0) computes.
-#[allow(clippy::needless_range_loop)]
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
 pub fn assemble(
     form: Form,
     sys: &Poisson,
