@@ -168,6 +168,8 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             CouplingMethod::Monolithic => Method::Monolithic,
             CouplingMethod::Schur => Method::Schur,
         },
+        ilu_order: s.coupling.ordering,
+        face_fill: s.coupling.face_fill,
         solver: BicgstabParams {
             tol: s.coupling.tolerance,
             max_iter: s.coupling.max_iterations as usize,

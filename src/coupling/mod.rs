@@ -38,6 +38,7 @@ use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
+pub use system::IluOrder;
 use system::{assemble, Form, Scalars};
 pub use warm::WarmStart;
 
@@ -87,6 +88,10 @@ pub struct CouplingParams {
     pub method: Method,
     /// BiCGSTAB stopping rule (paper: 1e-9 relative).
     pub solver: BicgstabParams,
+    /// Order of the monolithic system's unknowns for ILU(0).
+    pub ilu_order: IluOrder,
+    /// Keep the λ–λ fill of the particle rows in ILU(0)'s pattern.
+    pub face_fill: bool,
     /// Particle side.
     pub surface: SurfaceParams,
     /// Pressure PCG rule, used when there are no constraint faces.
@@ -316,13 +321,7 @@ pub fn solve(
     *warm = Some(kept);
     let q = &x[sys.qo..sys.qo + sys.nq];
     let u: Vec<Vec3> = (0..sys.np)
-        .map(|i| {
-            Vec3::new(
-                x[sys.uo + 3 * i],
-                x[sys.uo + 3 * i + 1],
-                x[sys.uo + 3 * i + 2],
-            )
-        })
+        .map(|i| Vec3::new(x[sys.u_row(i, 0)], x[sys.u_row(i, 1)], x[sys.u_row(i, 2)]))
         .collect();
     // (Gq)_f and the velocity change that takes each constraint face from
     // the pressure update of the ghost-fluid projection to (J u)_f
@@ -480,6 +479,8 @@ fn solve_form(
         vstar,
         band,
         sc,
+        prm.ilu_order,
+        prm.face_fill,
     )
     .map_err(solve_err("coupled system assembly"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
@@ -493,7 +494,7 @@ fn solve_form(
     let mut x = vec![0.0; a.nrows];
     for (i, u) in surf.u.iter().enumerate() {
         for d in 0..3 {
-            x[sys.uo + 3 * i + d] = u[d];
+            x[sys.u_row(i, d)] = u[d];
         }
     }
     if let Some(w) = warm {
@@ -538,14 +539,16 @@ fn eq24_residual(
         vstar,
         &vec![0.0; k.len()],
         sc,
+        IluOrder::Equation,
+        false,
     )
     .map_err(solve_err("eq. (24) residual"))?;
     let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
     let mut x = vec![0.0; a.nrows];
-    x[..sys.nq].copy_from_slice(q);
+    x[sys.qo..sys.qo + sys.nq].copy_from_slice(q);
     for (i, v) in u.iter().enumerate() {
         for d in 0..3 {
-            x[sys.uo + 3 * i + d] = v[d];
+            x[sys.u_row(i, d)] = v[d];
         }
     }
     for f in 0..k.len() {

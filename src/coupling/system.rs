@@ -38,7 +38,7 @@ use super::faces::Constraints;
 use super::surface::Surface;
 use crate::grid::projection::Poisson;
 use crate::grid::NONE;
-use crate::linsolve::{Csr, SolveError};
+use crate::linsolve::{csr::rows_from_triplets, reverse_cuthill_mckee, Csr, SolveError};
 use crate::math::{Real, Vec3};
 use faer::sparse::{SparseRowMat, Triplet};
 
@@ -79,6 +79,20 @@ pub enum Form {
     Reduced,
 }
 
+/// Order of the unknowns of the monolithic system, which is what ILU(0)
+/// eliminates in (`docs/decisions.md`, Coupling).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IluOrder {
+    /// [q, u, μ] as eq. (24) writes it, particles in joint-index order.
+    Equation,
+    /// [u, μ, q]: the particles first, numbered by reverse Cuthill–McKee of
+    /// the Laplacian's pattern (three interleaved rows each), then the
+    /// constraint faces, then the liquid cells.
+    #[default]
+    ParticlesFirst,
+}
+
 /// A sparse system and its right-hand side.
 pub struct Assembled {
     /// The matrix.
@@ -97,6 +111,16 @@ pub struct Assembled {
     pub np: usize,
     /// Constraint faces (0 in the reduced form).
     pub nk: usize,
+    /// Slot of each particle in the u block (`None`: joint-index order).
+    slot: Option<Vec<usize>>,
+}
+
+impl Assembled {
+    /// Row (and column) of component `d` of particle `i`'s velocity.
+    #[inline]
+    pub fn u_row(&self, i: usize, d: usize) -> usize {
+        self.uo + 3 * self.slot.as_ref().map_or(i, |s| s[i]) + d
+    }
 }
 
 /// Entries of the pressure block (symmetric 7-point stencil).
@@ -131,11 +155,18 @@ fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> 
 /// the constraint faces' flux w_f((J u)_f + c_f), so c enters their
 /// right-hand side (the monolithic form needs only v** − c).
 ///
-/// Unknown order: monolithic [q, u, μ] as eq. (24) writes it; reduced
-/// [u, q], so that ILU(0) meets the particle pivots first and the cells
-/// whose every face is a constraint face (a zero diagonal in A') receive
-/// their pivot from the eliminated particle block.
-#[allow(clippy::needless_range_loop)]
+/// Unknown order: monolithic [q, u, μ] as eq. (24) writes it
+/// ([`IluOrder::Equation`]) or [u, μ, q] with the particles in reverse
+/// Cuthill–McKee order ([`IluOrder::ParticlesFirst`]); reduced [u, q], so
+/// that ILU(0) meets the particle pivots first and the cells whose every
+/// face is a constraint face (a zero diagonal in A') receive their pivot
+/// from the eliminated particle block. With `face_fill` the monolithic
+/// matrix also stores explicit zeros between the constraint faces of one
+/// axis that share a free particle: the λ–λ fill that eliminating the
+/// particle rows creates, which ILU(0) then keeps (ILU with one level of
+/// fill in the λ block). Neither changes the system, only the incomplete
+/// factorisation ILU(0) computes.
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
 pub fn assemble(
     form: Form,
     sys: &Poisson,
@@ -144,17 +175,30 @@ pub fn assemble(
     vstar: &[Real],
     band: &[Real],
     sc: Scalars,
+    order: IluOrder,
+    face_fill: bool,
 ) -> Result<Assembled, SolveError> {
     let nq = sys.a.len();
     let np = surf.len();
     let nk = if form == Form::Monolithic { k.len() } else { 0 };
     let n = nq + 3 * np + nk;
+    let reorder = form == Form::Monolithic && order == IluOrder::ParticlesFirst;
     let (qo, uo, mo) = match form {
+        Form::Monolithic if reorder => (3 * np + nk, 0, 3 * np),
         Form::Monolithic => (0, nq, nq + 3 * np),
         Form::Reduced => (3 * np, 0, n),
     };
-    let vol = sc.density * sc.dx.powi(3);
     let l = Csr::from_faer(surf.laplacian.as_ref())?;
+    let slot = reorder.then(|| {
+        let rcm = reverse_cuthill_mckee(np, l.row_ptr, l.col);
+        let mut slot = vec![0; np];
+        for (s, &i) in rcm.iter().enumerate() {
+            slot[i] = s;
+        }
+        slot
+    });
+    let ur = |i: usize, d: usize| uo + 3 * slot.as_ref().map_or(i, |s| s[i]) + d;
+    let vol = sc.density * sc.dx.powi(3);
     let mut t: Vec<Triplet<usize, usize, Real>> =
         Vec::with_capacity(7 * nq + 3 * l.val.len() + 4 * k.col.len() + 4 * k.len());
     let mut rhs = vec![0.0; n];
@@ -173,7 +217,7 @@ pub fn assemble(
     for i in 0..np {
         let mh = surf.mass[i] / vol;
         for d in 0..3 {
-            let r = uo + 3 * i + d;
+            let r = ur(i, d);
             t.push(Triplet::new(r, r, -mh));
             if surf.fixed[i] {
                 rhs[r] = -mh * surf.u[i][d];
@@ -189,7 +233,7 @@ pub fn assemble(
             };
             let ch = (sc.sigma * sc.dt * sc.dt * surf.area[i] + visc) / vol;
             for kk in l.row_ptr[i]..l.row_ptr[i + 1] {
-                t.push(Triplet::new(r, uo + 3 * l.col[kk] + d, ch * l.val[kk]));
+                t.push(Triplet::new(r, ur(l.col[kk], d), ch * l.val[kk]));
             }
             rhs[r] = -(surf.mass[i] * surf.u[i][d]
                 + sc.dt * (sc.sigma * surf.area[i] * lx[i][d] + surf.force[i][d]))
@@ -220,7 +264,7 @@ pub fn assemble(
                     t.push(Triplet::new(m, qo + c, s * w / th));
                 }
                 for (i, j) in k.row(f) {
-                    let r = uo + 3 * i + a;
+                    let r = ur(i, a);
                     t.push(Triplet::new(m, r, -w * j));
                     if !surf.fixed[i] {
                         t.push(Triplet::new(r, m, -w * j));
@@ -232,7 +276,7 @@ pub fn assemble(
                 for (c, s) in face_cells(k, f) {
                     rhs[qo + c] -= s * w * band[f];
                     for (i, j) in k.row(f) {
-                        let r = uo + 3 * i + a;
+                        let r = ur(i, a);
                         t.push(Triplet::new(qo + c, r, s * w * j));
                         if !surf.fixed[i] {
                             t.push(Triplet::new(r, qo + c, s * w * j));
@@ -243,17 +287,48 @@ pub fn assemble(
                     if surf.fixed[i] {
                         continue;
                     }
-                    let r = uo + 3 * i + a;
+                    let r = ur(i, a);
                     rhs[r] -= ji * w * th * vstar[f];
                     for (jdx, jj) in k.row(f) {
-                        t.push(Triplet::new(r, uo + 3 * jdx + a, -ji * w * th * jj));
+                        t.push(Triplet::new(r, ur(jdx, a), -ji * w * th * jj));
                     }
                 }
             }
         }
     }
-    let matrix = SparseRowMat::try_new_from_triplets(n, n, &t)
-        .map_err(|e| SolveError::Dimension(format!("{e:?}")))?;
+    if form == Form::Monolithic && face_fill {
+        // explicit zeros where eliminating a particle row fills the λ block:
+        // faces of one axis that share a (free) particle
+        let mut faces_of: Vec<Vec<usize>> = vec![Vec::new(); 3 * np];
+        for f in 0..k.len() {
+            let a = k.faces[f].0;
+            for (i, _) in k.row(f) {
+                if !surf.fixed[i] {
+                    faces_of[3 * i + a].push(f);
+                }
+            }
+        }
+        let mut seen = vec![usize::MAX; k.len()];
+        for f in 0..k.len() {
+            let a = k.faces[f].0;
+            seen[f] = f;
+            for (i, _) in k.row(f) {
+                for &g in &faces_of[3 * i + a] {
+                    if seen[g] != f {
+                        seen[g] = f;
+                        t.push(Triplet::new(mo + f, mo + g, 0.0));
+                    }
+                }
+            }
+        }
+    }
+    let matrix = if reorder {
+        // the triplets are out of row order: bucket them by row first
+        rows_from_triplets(n, n, &t)?
+    } else {
+        SparseRowMat::try_new_from_triplets(n, n, &t)
+            .map_err(|e| SolveError::Dimension(format!("{e:?}")))?
+    };
     Ok(Assembled {
         matrix,
         rhs,
@@ -263,5 +338,6 @@ pub fn assemble(
         nq,
         np,
         nk,
+        slot,
     })
 }

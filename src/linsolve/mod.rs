@@ -13,10 +13,12 @@
 pub mod bicgstab;
 pub mod csr;
 pub mod ilu0;
+pub mod order;
 
 pub use bicgstab::{bicgstab, BicgstabParams};
 pub use csr::Csr;
 pub use ilu0::{Identity, Ilu0, Jacobi, Preconditioner};
+pub use order::reverse_cuthill_mckee;
 
 /// What a solve reached.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]

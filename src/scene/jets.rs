@@ -64,10 +64,20 @@ pub struct CouplingSettings {
     #[serde(default)]
     pub face_mass: FaceMassSetting,
     /// Velocity the constraint faces are held to: `extrapolated` (the
-    /// sheet's velocity carried to the face with its gradient, completed
-    /// as an incompressible irrotational flow) or `sheet` (the sheet's own).
+    /// sheet's velocity plus the liquid's velocity change along the sheet
+    /// normal from the sheet to the face) or `sheet` (the sheet's own).
     #[serde(default)]
     pub band: BandSetting,
+    /// Order of the monolithic system's unknowns for ILU(0): `equation`
+    /// ([q, u, λ] as eq. 24 writes it) or `particles_first` ([u, λ, q], the
+    /// particles in reverse Cuthill–McKee order).
+    #[serde(default)]
+    pub ordering: crate::coupling::IluOrder,
+    /// Keep in ILU(0)'s pattern the impulse–impulse entries that
+    /// eliminating the particle rows fills in (faces of one axis sharing a
+    /// particle); the stored values are zeros, the system is unchanged.
+    #[serde(default = "default_face_fill")]
+    pub face_fill: bool,
 }
 
 /// `coupling.band`.
@@ -79,6 +89,10 @@ pub enum BandSetting {
     /// Carried to the face with the sheet's velocity gradient (default).
     #[default]
     Extrapolated,
+}
+
+fn default_face_fill() -> bool {
+    true
 }
 
 /// `coupling.face_mass`.
@@ -100,6 +114,8 @@ impl Default for CouplingSettings {
             method: CouplingMethod::Monolithic,
             face_mass: FaceMassSetting::Sheet,
             band: BandSetting::Extrapolated,
+            ordering: crate::coupling::IluOrder::default(),
+            face_fill: default_face_fill(),
         }
     }
 }
