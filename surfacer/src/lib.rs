@@ -24,6 +24,7 @@ pub mod eigen3;
 pub mod error;
 pub mod filaments;
 pub mod hash;
+mod leafbits;
 pub mod levelset;
 pub mod mesh;
 pub mod pipeline;
