@@ -109,6 +109,8 @@ pub struct StepParams {
     pub flip: Real,
     /// Level-set particle radius relative to Δx.
     pub surface_radius: Real,
+    /// Keep separate liquid bodies apart on the grid (`solver.separate_bodies`).
+    pub separate_bodies: bool,
     /// Pressure PCG stopping rule.
     pub pressure: PcgParams,
     /// Viscosity PCG stopping rule.
@@ -140,6 +142,7 @@ impl StepParams {
             transfer: s.solver.transfer,
             flip: s.solver.flip,
             surface_radius: s.solver.surface_radius,
+            separate_bodies: s.solver.separate_bodies,
             pressure: PcgParams {
                 tolerance: s.solver.pressure_tolerance,
                 max_iterations: s.solver.pressure_max_iterations,
@@ -381,7 +384,15 @@ pub fn step(
     // 5: particles → grid
     timed(times, "p2g", || {
         let c = apic.then_some(affine.as_slice());
-        transfer_to_grid(grid, particles, solids, p.margin, p.surface_radius, c)
+        transfer_to_grid(
+            grid,
+            particles,
+            solids,
+            p.margin,
+            p.surface_radius,
+            p.separate_bodies,
+            c,
+        )
     });
     // 6: viscosity, grid part of eq. (13); the MLS part for C-1/C-2 joins here
     info.viscosity = if p.viscosity > 0.0 {

@@ -90,6 +90,7 @@ pub fn particles_to_grid(
     parts: &Particles,
     sort: &CellSort,
     surface_radius: Real,
+    labels: Option<&[u32]>,
     affine: Option<&[[Vec3; 3]]>,
 ) -> Valid {
     let ns = grid.slots();
@@ -102,17 +103,19 @@ pub fn particles_to_grid(
     }
     // one gather over the 27 cells around each slot gives its three lower
     // faces (weights relative to the slot's lower corner) and φ at its centre
-    let per_slot: Vec<([Real; 3], [u8; 3], Real)> = (0..ns)
+    let per_slot: Vec<([Real; 3], [u8; 3], Real, u32)> = (0..ns)
         .into_par_iter()
         .map(|s| {
             if !g.in_domain(s) {
-                return ([0.0; 3], [0; 3], g.dx);
+                return ([0.0; 3], [0; 3], g.dx, u32::MAX);
             }
             let c = g.cell(s);
             let corner = Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real);
             let mut num = [0.0; 3];
             let mut den = [0.0; 3];
             let mut d2min = Real::INFINITY;
+            // body of the nearest volume particle (`body_labels`)
+            let mut body = u32::MAX;
             for dz in -1..=1isize {
                 for dy in -1..=1isize {
                     for dxi in -1..=1isize {
@@ -144,7 +147,11 @@ pub fn particles_to_grid(
                                 }
                             }
                             let e = r - Vec3::repeat(0.5);
-                            d2min = d2min.min(e.norm_squared());
+                            let d2 = e.norm_squared();
+                            if d2 < d2min {
+                                d2min = d2;
+                                body = labels.map_or(u32::MAX, |l| l[p]);
+                            }
                         }
                     }
                 }
@@ -157,7 +164,7 @@ pub fn particles_to_grid(
                     f[a] = 1;
                 }
             }
-            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx))
+            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx), body)
         })
         .collect();
     let mut valid: Valid = Default::default();
@@ -166,7 +173,36 @@ pub fn particles_to_grid(
         u[a] = per_slot.iter().map(|x| x.0[a]).collect();
         valid[a] = per_slot.iter().map(|x| x.1[a]).collect();
     }
-    let phi: Vec<Real> = per_slot.iter().map(|x| x.2).collect();
+    let mut phi: Vec<Real> = per_slot.iter().map(|x| x.2).collect();
+    if labels.is_some() {
+        // a liquid cell beside a liquid cell of another body is air: the two
+        // bodies stay apart on the grid until their particles meet
+        let body: Vec<u32> = per_slot.iter().map(|x| x.3).collect();
+        let gap: Vec<bool> = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                phi[s] < 0.0
+                    && [
+                        [-1, 0, 0],
+                        [1, 0, 0],
+                        [0, -1, 0],
+                        [0, 1, 0],
+                        [0, 0, -1],
+                        [0, 0, 1],
+                    ]
+                    .iter()
+                    .any(|&o| {
+                        g.neighbor(s, o)
+                            .is_some_and(|t| phi[t] < 0.0 && body[t] != body[s])
+                    })
+            })
+            .collect();
+        for (p, &is_gap) in phi.iter_mut().zip(&gap) {
+            if is_gap {
+                *p = 0.01 * g.dx;
+            }
+        }
+    }
     // The distance to the nearest particle is not a distance to the surface
     // deep inside the liquid; one Jacobi pass of the Lipschitz bound
     // φ_c ← min(φ_c, max_n φ_n − Δx) over cells whose six neighbours are all
@@ -217,14 +253,84 @@ pub fn transfer_to_grid(
     solids: &SolidSet,
     margin: usize,
     surface_radius: Real,
+    separate_bodies: bool,
     affine: Option<&[[Vec3; 3]]>,
 ) {
     grid.activate(&parts.x, margin);
     grid.compute_weights(solids);
     let sort = sort_particles(grid, parts);
-    let mut valid = particles_to_grid(grid, parts, &sort, surface_radius, affine);
+    let labels = separate_bodies.then(|| body_labels(parts, 0.5 * grid.dx));
+    let mut valid = particles_to_grid(
+        grid,
+        parts,
+        &sort,
+        surface_radius,
+        labels.as_deref(),
+        affine,
+    );
     extrapolate(grid, &mut valid, margin + 1);
     grid.u_old = grid.u.clone();
+}
+
+/// Bodies of liquid: connected components of the volume particles, two
+/// particles joined when their cells of size `cell` touch (26-neighbours).
+/// Returns each particle's body (the smallest cell index of its component,
+/// so the labels depend on the input only), `u32::MAX` for other
+/// codimensions.
+pub fn body_labels(parts: &Particles, cell: Real) -> Vec<u32> {
+    let inv = 1.0 / cell;
+    let key = |x: &Vec3| -> [i64; 3] { [0, 1, 2].map(|a| (x[a] * inv).floor() as i64) };
+    let mut cells: Vec<[i64; 3]> = parts
+        .x
+        .iter()
+        .zip(&parts.codim)
+        .filter(|(_, c)| **c == Codim::Volume)
+        .map(|(x, _)| key(x))
+        .collect();
+    cells.par_sort_unstable();
+    cells.dedup();
+    let mut parent: Vec<u32> = (0..cells.len() as u32).collect();
+    fn find(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            let g = parent[parent[i as usize] as usize];
+            parent[i as usize] = g;
+            i = g;
+        }
+        i
+    }
+    for i in 0..cells.len() {
+        let c = cells[i];
+        for d in 0..27i64 {
+            let o = [d / 9 - 1, d / 3 % 3 - 1, d % 3 - 1];
+            if o <= [0, 0, 0] {
+                continue;
+            }
+            let n = [c[0] + o[0], c[1] + o[1], c[2] + o[2]];
+            if let Ok(j) = cells.binary_search(&n) {
+                let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j as u32));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
+                }
+            }
+        }
+    }
+    let root: Vec<u32> = (0..cells.len() as u32)
+        .map(|i| find(&mut parent, i))
+        .collect();
+    parts
+        .x
+        .par_iter()
+        .zip(parts.codim.par_iter())
+        .map(|(x, c)| {
+            if *c != Codim::Volume {
+                return u32::MAX;
+            }
+            let i = cells
+                .binary_search(&key(x))
+                .expect("every volume particle's cell is listed");
+            root[i]
+        })
+        .collect()
 }
 
 /// Algorithm 1 step 8: PIC/FLIP update of the codimension-0 particle velocities.
@@ -298,4 +404,48 @@ pub fn grid_to_particles_apic(grid: &MacGrid, parts: &mut Particles, affine: &mu
                 c[a] = ca;
             }
         });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bodies_are_components_of_touching_cells() {
+        // two 3³ lattices of spacing 0.25 (cell 0.5): with a gap of 1.0
+        // between them they are two bodies; with 0.01 (cells touching) one;
+        // a sheet particle belongs to none
+        let labels = |gap: Real| {
+            let mut p = Particles::default();
+            for x0 in [0.0, 0.5 + gap] {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        for k in 0..3 {
+                            let x = Vec3::new(
+                                x0 + 0.25 * i as Real,
+                                0.25 * j as Real,
+                                0.25 * k as Real,
+                            );
+                            p.push(x, Vec3::zeros(), 1.0, 0.1, Codim::Volume);
+                        }
+                    }
+                }
+            }
+            p.push(
+                Vec3::new(-1.0, 0.0, 0.0),
+                Vec3::zeros(),
+                1.0,
+                0.1,
+                Codim::Sheet,
+            );
+            body_labels(&p, 0.5)
+        };
+        let l = labels(1.0);
+        assert!(l[..27].iter().all(|&b| b == l[0]));
+        assert!(l[27..54].iter().all(|&b| b == l[27]));
+        assert_ne!(l[0], l[27]);
+        assert_eq!(l[54], u32::MAX);
+        let l = labels(0.01);
+        assert!(l[..54].iter().all(|&b| b == l[0]));
+    }
 }

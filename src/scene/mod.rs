@@ -144,6 +144,11 @@ pub struct SolverSettings {
     /// Radius of each particle's sphere in the liquid level set, relative to Δx.
     #[serde(default = "default_surface_radius")]
     pub surface_radius: f64,
+    /// Keep separate liquid bodies apart on the grid: a liquid cell next to
+    /// a liquid cell of another body is air until the bodies meet
+    /// (`grid::transfer::body_labels`).
+    #[serde(default)]
+    pub separate_bodies: bool,
 }
 
 /// Particle–grid velocity transfer scheme.
@@ -349,6 +354,7 @@ impl Default for SolverSettings {
             viscosity_tolerance: default_tol(),
             viscosity_max_iterations: default_iters(),
             surface_radius: default_surface_radius(),
+            separate_bodies: false,
         }
     }
 }
