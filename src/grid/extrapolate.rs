@@ -9,19 +9,10 @@
 //! its normal component (free slip, solid velocity 0; Bridson 2015 §4.3).
 
 use super::transfer::Valid;
-use super::MacGrid;
+use super::{MacGrid, FACE_OFFSETS};
 use crate::math::{Real, Vec3};
 use crate::solids::SolidSet;
 use rayon::prelude::*;
-
-const OFFS: [[isize; 3]; 6] = [
-    [-1, 0, 0],
-    [1, 0, 0],
-    [0, -1, 0],
-    [0, 1, 0],
-    [0, 0, -1],
-    [0, 0, 1],
-];
 
 /// True for faces on or past the domain walls (always 0, never extrapolated).
 #[inline]
@@ -45,7 +36,7 @@ pub fn extrapolate_component(
                     return None;
                 }
                 let (mut sum, mut cnt) = (0.0, 0);
-                for o in OFFS {
+                for o in FACE_OFFSETS {
                     if let Some(t) = g.neighbor(s, o) {
                         if valid[t] != 0 {
                             sum += field[t];

@@ -33,6 +33,16 @@ pub const BV: usize = B * B * B;
 /// "No entry" in index tables.
 pub const NONE: u32 = u32::MAX;
 
+/// Offsets of a cell's six face neighbours (−x, +x, −y, +y, −z, +z).
+pub const FACE_OFFSETS: [[isize; 3]; 6] = [
+    [-1, 0, 0],
+    [1, 0, 0],
+    [0, -1, 0],
+    [0, 1, 0],
+    [0, 0, -1],
+    [0, 0, 1],
+];
+
 /// A jet's inflow disk: the liquid enters through it at a fixed velocity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inflow {
@@ -251,17 +261,7 @@ impl MacGrid {
             .map(|s| {
                 let c = g.cell(s);
                 let mut n = [NONE; 6];
-                for (d, o) in [
-                    [-1, 0, 0],
-                    [1, 0, 0],
-                    [0, -1, 0],
-                    [0, 1, 0],
-                    [0, 0, -1],
-                    [0, 0, 1],
-                ]
-                .iter()
-                .enumerate()
-                {
+                for (d, o) in FACE_OFFSETS.iter().enumerate() {
                     if let Some(t) = g.slot(c[0] + o[0], c[1] + o[1], c[2] + o[2]) {
                         n[d] = t as u32;
                     }

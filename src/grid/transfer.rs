@@ -21,7 +21,7 @@
 //! next to a wall keeps a growing normal velocity that the grid never sees.
 
 use super::extrapolate::extrapolate;
-use super::{MacGrid, NONE};
+use super::{MacGrid, FACE_OFFSETS, NONE};
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
 use crate::solids::SolidSet;
@@ -182,16 +182,7 @@ pub fn particles_to_grid(
             .into_par_iter()
             .map(|s| {
                 phi[s] < 0.0
-                    && [
-                        [-1, 0, 0],
-                        [1, 0, 0],
-                        [0, -1, 0],
-                        [0, 1, 0],
-                        [0, 0, -1],
-                        [0, 0, 1],
-                    ]
-                    .iter()
-                    .any(|&o| {
+                    && FACE_OFFSETS.iter().any(|&o| {
                         g.neighbor(s, o)
                             .is_some_and(|t| phi[t] < 0.0 && body[t] != body[s])
                     })
@@ -216,14 +207,7 @@ pub fn particles_to_grid(
                 return p;
             }
             let mut mx = Real::NEG_INFINITY;
-            for o in [
-                [-1, 0, 0],
-                [1, 0, 0],
-                [0, -1, 0],
-                [0, 1, 0],
-                [0, 0, -1],
-                [0, 0, 1],
-            ] {
+            for o in FACE_OFFSETS {
                 match g.neighbor(s, o) {
                     Some(t) if phi[t] < 0.0 => mx = mx.max(phi[t]),
                     Some(_) => return p,
