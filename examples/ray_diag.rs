@@ -118,47 +118,35 @@ fn main() {
         }
         println!();
         if std::env::var("AXIS").is_ok() {
+            // faces of component `a` on the positive half of axis `a` (the
+            // other two coordinates within half a cell of 0), inside r + 3Δx:
+            // (position / Δx, velocity scaled by `scale(position)`), sorted
+            let axis = |a: usize, scale: &dyn Fn(Real) -> Real| {
+                let mut col: Vec<(Real, Real)> = Vec::new();
+                for s in 0..g.slots() {
+                    if !g.in_domain(s) {
+                        continue;
+                    }
+                    let x = g.face_pos(s, a);
+                    let off = (0..3)
+                        .filter(|&b| b != a)
+                        .all(|b| x[b].abs() <= 0.5 * dx + 1e-9 && x[b] >= 0.0);
+                    if off && x[a] > 0.0 && x[a] < r + 3.0 * dx {
+                        col.push((x[a] / dx, g.u[a][s] * scale(x[a])));
+                    }
+                }
+                col.sort_by(|p, q| p.0.partial_cmp(&q.0).unwrap());
+                col
+            };
             // y-faces along the y axis: v_y / (2 y A_d)
-            let mut col: Vec<(Real, Real)> = Vec::new();
-            for s in 0..g.slots() {
-                if !g.in_domain(s) {
-                    continue;
-                }
-                let x = g.face_pos(s, 1);
-                if x.x.abs() <= 0.5 * dx + 1e-9
-                    && x.z.abs() <= 0.5 * dx + 1e-9
-                    && x.x >= 0.0
-                    && x.z >= 0.0
-                    && x.y > 0.0
-                    && x.y < r + 3.0 * dx
-                {
-                    col.push((x.y / dx, g.u[1][s] / (2.0 * x.y)));
-                }
-            }
-            col.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap());
+            let col = axis(1, &|y| 1.0 / (2.0 * y));
             println!(
                 "   axis y/dx: v_y/(2y) = {:?}",
                 col.iter()
                     .map(|(y, v)| format!("{y:.2}:{v:+.4}"))
                     .collect::<Vec<_>>()
             );
-            let mut col: Vec<(Real, Real)> = Vec::new();
-            for s in 0..g.slots() {
-                if !g.in_domain(s) {
-                    continue;
-                }
-                let x = g.face_pos(s, 0);
-                if x.y.abs() <= 0.5 * dx + 1e-9
-                    && x.z.abs() <= 0.5 * dx + 1e-9
-                    && x.y >= 0.0
-                    && x.z >= 0.0
-                    && x.x > 0.0
-                    && x.x < r + 3.0 * dx
-                {
-                    col.push((x.x / dx, -g.u[0][s] / x.x));
-                }
-            }
-            col.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap());
+            let col = axis(0, &|x| -1.0 / x);
             // divergence of the cells along +y (x = z = 0)
             let mut dv = Vec::new();
             for s in 0..g.slots() {
