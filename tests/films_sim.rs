@@ -178,6 +178,31 @@ fn bursting_bubble_rim_retracts_at_the_taylor_culick_speed_past_40_ms() {
     assert!(sim.state.particles.all_finite());
 }
 
+/// Runs the blowing-bubble preset with `edits` and wind speed `w` (m/s) for
+/// `frames` frames, fitting the apex with `apex` after each; returns the sim,
+/// its starting mass, the (height, radius) per frame and the Young–Laplace
+/// apex radius 4σ/(c ρ_air w²) of the preset's σ = 0.01, c = 1, ρ_air = 1.2.
+fn blow(
+    dir: &Path,
+    edits: &[(&str, &str)],
+    w: f64,
+    frames: u32,
+    apex: impl Fn(&codimfx::particles::Particles) -> (f64, f64),
+) -> (Sim, f64, Vec<(f64, f64)>, f64) {
+    let scene = preset_with(dir, "blowing_bubble", edits);
+    let (sigma, rho_air, drag) = (0.01, 1.2, 1.0);
+    let r_pred = 4.0 * sigma / (drag * rho_air * w * w);
+    let mut sim = open(&scene, dir, frames, false);
+    let m0 = sim.state.particles.total_mass();
+    let mut fits = Vec::new();
+    sim.run(&AtomicBool::new(false), |s, _| {
+        fits.push(apex(&s.state.particles))
+    })
+    .unwrap();
+    eprintln!("apex (height, radius) per frame {fits:?}; Young-Laplace R = {r_pred}");
+    (sim, m0, fits, r_pred)
+}
+
 #[test]
 fn wind_inflates_the_ring_film_to_the_young_laplace_curvature() {
     // The blowing-bubble preset (ring radius 0.0192 m, σ = 0.01) at s = 1.2 mm
@@ -187,20 +212,7 @@ fn wind_inflates_the_ring_film_to_the_young_laplace_curvature() {
     // pressure of a film with two faces, 4σ/R: R = 4σ/p = 33.3 mm (> the ring
     // radius, so an equilibrium cap exists; the preset's 1.5 m/s has none).
     let tmp = tempfile::tempdir().unwrap();
-    let scene = preset_with(
-        tmp.path(),
-        "blowing_bubble",
-        &[
-            ("dx: 0.0012 ", "dx: 0.0036 "),
-            ("velocity: [0, 1.5, 0]", "velocity: [0, 1.0, 0]"),
-            ("gravity: [0, -9.81, 0]", "gravity: [0, 0, 0]"),
-            ("  thickness: 1.0e-6", "  thickness: 1.0e-6\n  damping: 20"),
-        ],
-    );
-    let (a, sigma, rho_air, drag, w): (f64, f64, f64, f64, f64) = (0.0192, 0.01, 1.2, 1.0, 1.0);
-    let r_pred = 4.0 * sigma / (drag * rho_air * w * w);
-    let mut sim = open(&scene, tmp.path(), 15, false);
-    let m0 = sim.state.particles.total_mass();
+    let a = 0.0192;
     // apex curvature: least-squares fit y = y0 + c ρ² over the free film
     // within ρ < a/2 of the axis; a cap bulging to +y has c < 0, R = −1/(2c)
     let apex = |p: &codimfx::particles::Particles| {
@@ -221,13 +233,18 @@ fn wind_inflates_the_ring_film_to_the_young_laplace_curvature() {
         let y0 = (s[2] - c * s[0]) / nn;
         (y0, -1.0 / (2.0 * c))
     };
-    let mut radii = Vec::new();
-    sim.run(&AtomicBool::new(false), |s, _| {
-        let (y0, r) = apex(&s.state.particles);
-        radii.push((y0, r));
-    })
-    .unwrap();
-    eprintln!("apex (height, radius) per frame {radii:?}; Young-Laplace R = {r_pred}");
+    let (sim, m0, radii, r_pred) = blow(
+        tmp.path(),
+        &[
+            ("dx: 0.0012 ", "dx: 0.0036 "),
+            ("velocity: [0, 1.5, 0]", "velocity: [0, 1.0, 0]"),
+            ("gravity: [0, -9.81, 0]", "gravity: [0, 0, 0]"),
+            ("  thickness: 1.0e-6", "  thickness: 1.0e-6\n  damping: 20"),
+        ],
+        1.0,
+        15,
+        apex,
+    );
     let (y0, r) = *radii.last().unwrap();
     // inflated downwind (+y), at the Young–Laplace radius of curvature
     assert!(y0 > 0.002, "apex at {y0}");
@@ -303,24 +320,16 @@ fn preset_wind_blows_a_steady_bag_with_the_young_laplace_apex() {
     // row next to the ring turned into a rim and drained the film into the
     // ring, and the film tore there 10 ms in (docs/presets.md).
     let tmp = tempfile::tempdir().unwrap();
-    let scene = preset_with(
+    let (sim, m0, apex, r_pred) = blow(
         tmp.path(),
-        "blowing_bubble",
         &[
             ("dx: 0.0012 ", "dx: 0.0024 "),
             ("velocity: [0, 1.5, 0]", "velocity: [0, 1.5, 0]"),
         ],
+        1.5,
+        4,
+        |p| apex_quartic(p, 0.25 * 0.0192),
     );
-    let (sigma, rho_air, drag, w) = (0.01, 1.2, 1.0, 1.5);
-    let r_pred = 4.0 * sigma / (drag * rho_air * w * w);
-    let mut sim = open(&scene, tmp.path(), 4, false);
-    let m0 = sim.state.particles.total_mass();
-    let mut apex = Vec::new();
-    sim.run(&AtomicBool::new(false), |s, _| {
-        apex.push(apex_quartic(&s.state.particles, 0.25 * 0.0192));
-    })
-    .unwrap();
-    eprintln!("apex (height, radius) per frame {apex:?}; Young-Laplace R = {r_pred}");
     // steady from frame 3 on: the apex no longer moves
     let (y3, _) = apex[2];
     let (y4, r4) = apex[3];
