@@ -48,25 +48,9 @@ pub fn advect(
             } else {
                 *x + v * dt
             };
-            let mut clamped = 0;
-            let mut pushed = 0;
-            // a push out of a solid may cross a wall and a clamp may re-enter
-            // the solid (a solid touching a wall): alternate a few times
-            for _ in 0..4 {
-                for d in 0..3 {
-                    let q = p[d].clamp(lo[d] + eps, hi[d] - eps);
-                    if q != p[d] {
-                        clamped = 1;
-                        p[d] = q;
-                    }
-                }
-                if !solids.push_out(&mut p, eps, 1e-3 * grid.dx) {
-                    break;
-                }
-                pushed = 1;
-            }
+            let (pushed, clamped) = solids.push_out_in_box(&mut p, &lo, &hi, eps, 1e-3 * grid.dx);
             *x = p;
-            (pushed, clamped)
+            (pushed as u8, clamped as u8)
         })
         .unzip();
     AdvectInfo {

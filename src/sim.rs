@@ -53,12 +53,14 @@ pub enum SimError {
     #[error(transparent)]
     Manifest(#[from] ManifestError),
     /// A substep failed.
-    #[error("frame {frame}, t = {time:.6} s: {source}")]
+    #[error("frame {frame}, t = {time:.6} s{}: {source}", after_halvings(*halvings))]
     Step {
         /// Frame being computed.
         frame: u32,
         /// Simulated time when it failed (s).
         time: Real,
+        /// Times the failing substep had been halved and retried.
+        halvings: u32,
         /// The stage error.
         source: StepError,
     },
@@ -167,6 +169,24 @@ fn base_record(frame: u32, time: Real, p: &Particles) -> FrameRecord {
 /// Emits every jet's layers of [t0, t1) before the substep [t0, t1), placed
 /// at their free-flight positions at t0 (the substep carries them on); keeps
 /// the APIC matrices aligned. Returns the number of particles added.
+fn after_halvings(n: u32) -> String {
+    if n == 0 {
+        String::new()
+    } else {
+        format!(", after {n} halvings of the substep")
+    }
+}
+
+/// Consecutive halvings of a liquid substep before the run stops.
+const MAX_HALVINGS: u32 = 4;
+
+/// A liquid substep that failed in a solve or left non-finite particles is
+/// retried with half the substep; an error of the film step has already
+/// been retried inside it.
+fn retry_with_half_step(e: &StepError) -> bool {
+    !matches!(e, StepError::Film(_))
+}
+
 fn emit_jets(jets: &[Jet], t0: Real, t1: Real, st: &mut SimState) -> usize {
     let n: usize = jets
         .iter()
@@ -378,6 +398,11 @@ impl Sim {
         let film_spacing = film_driver::spacing(&self.scene);
         // each frame's first coupled solve starts cold: what a resumed run sees
         self.state.warm = None;
+        // a failed coupled solve is retried from the same state with half the
+        // substep (at most MAX_HALVINGS times in a row); the cap then holds
+        // for the rest of the frame
+        let mut dt_cap = Real::INFINITY;
+        let mut failures = 0u32;
         while self.time < t_end {
             let rem = t_end - self.time;
             let (dt, last) = if self.params.film.is_some() {
@@ -408,10 +433,17 @@ impl Sim {
                 if v_jet > 0.0 {
                     dt = dt.min(self.scene.time.cfl * dx / v_jet);
                 }
-                film_driver::fit_to_frame(dt, rem)
+                film_driver::fit_to_frame(dt.min(dt_cap), rem)
             };
             let t1 = if last { t_end } else { self.time + dt };
-            rec.emitted += emit_jets(&self.jets, self.time, t1, &mut self.state) as u64;
+            let before = self.params.film.is_none().then(|| {
+                (
+                    self.state.particles.clone(),
+                    self.state.affine.clone(),
+                    self.state.warm.clone(),
+                )
+            });
+            let emitted = emit_jets(&self.jets, self.time, t1, &mut self.state) as u64;
             // jets that are on during [t, t1) feed the liquid through their nozzle disk
             self.params.inflow = self
                 .jets
@@ -424,13 +456,36 @@ impl Sim {
                     speed: j.speed,
                 })
                 .collect();
-            let info = step(&mut self.state, &self.params, dt, &mut times).map_err(|source| {
-                SimError::Step {
-                    frame: f,
-                    time: self.time,
-                    source,
-                }
-            })?;
+            let info = match step(&mut self.state, &self.params, dt, &mut times) {
+                Ok(info) => info,
+                Err(source) => match before {
+                    Some((particles, affine, warm))
+                        if failures < MAX_HALVINGS && retry_with_half_step(&source) =>
+                    {
+                        self.state.particles = particles;
+                        self.state.affine = affine;
+                        self.state.warm = warm;
+                        dt_cap = 0.5 * dt;
+                        failures += 1;
+                        rec.fallbacks.step_halvings += 1;
+                        eprintln!(
+                            "warning: frame {f}, t = {:.6} s: {source}; retrying with Δt = {:.3e} s",
+                            self.time, dt_cap
+                        );
+                        continue;
+                    }
+                    _ => {
+                        return Err(SimError::Step {
+                            frame: f,
+                            time: self.time,
+                            halvings: failures,
+                            source,
+                        })
+                    }
+                },
+            };
+            failures = 0;
+            rec.emitted += emitted;
             self.time = t1;
             substeps += 1;
             dt_min = dt_min.min(dt);

@@ -184,11 +184,92 @@ impl SolidSet {
         }
         moved
     }
+
+    /// [`Self::push_out`] for a point that must also stay in the box
+    /// `[lo + margin, hi − margin]`: the point is clamped to the box, and the
+    /// push along the solid's normal drops the components that point out
+    /// through a wall the point lies on, so a point where a solid meets a
+    /// wall slides along the wall instead of bouncing between the two.
+    /// Returns (pushed out of a solid, clamped to the box).
+    pub fn push_out_in_box(
+        &self,
+        x: &mut Vec3,
+        lo: &Vec3,
+        hi: &Vec3,
+        margin: Real,
+        h: Real,
+    ) -> (bool, bool) {
+        let (mut pushed, mut clamped) = (false, false);
+        for _ in 0..16 {
+            for d in 0..3 {
+                let q = x[d].clamp(lo[d] + margin, hi[d] - margin);
+                if q != x[d] {
+                    clamped = true;
+                    x[d] = q;
+                }
+            }
+            if self.shapes.is_empty() {
+                break;
+            }
+            let p = self.phi(x);
+            if p >= margin {
+                break;
+            }
+            let mut n = self.normal(x, h);
+            for d in 0..3 {
+                if (x[d] <= lo[d] + margin && n[d] < 0.0) || (x[d] >= hi[d] - margin && n[d] > 0.0)
+                {
+                    n[d] = 0.0;
+                }
+            }
+            let nn = n.norm_squared();
+            if nn < 1e-12 {
+                break;
+            }
+            // φ(x + t n') ≈ φ + t n·n' = φ + t |n'|²
+            *x += n * ((margin - p) / nn);
+            pushed = true;
+        }
+        (pushed, clamped)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_point_where_a_solid_meets_a_wall_ends_outside_both() {
+        // the dam-break bump: a sphere centred 0.05 inside the box crossing
+        // the wall z = 0; points just inside it, at and beside the wall
+        let s = SolidSet::from_scene(&[Solid::Sphere {
+            center: [0.25, 0.0, 0.05],
+            radius: 0.06,
+        }]);
+        let (lo, hi) = (Vec3::zeros(), Vec3::new(0.4, 0.3, 0.1));
+        let m = 1.25e-5;
+        for start in [
+            Vec3::new(0.259, 0.0317, -8.5e-5),
+            Vec3::new(0.259, 0.0317, 0.0),
+            Vec3::new(0.25, 0.01, 1e-3),
+            Vec3::new(0.27, 0.01, 0.099),
+        ] {
+            let mut x = start;
+            let (pushed, _) = s.push_out_in_box(&mut x, &lo, &hi, m, 1e-6);
+            assert!(pushed, "{start:?} starts inside the sphere");
+            assert!(
+                s.phi(&x) >= m * (1.0 - 1e-6),
+                "{start:?} → {x:?}: φ = {}",
+                s.phi(&x)
+            );
+            for d in 0..3 {
+                assert!(
+                    x[d] >= lo[d] + m && x[d] <= hi[d] - m,
+                    "{start:?} → {x:?} leaves the box"
+                );
+            }
+        }
+    }
 
     #[test]
     fn distances_of_each_shape() {

@@ -111,6 +111,8 @@ pub struct StepParams {
     pub surface_radius: Real,
     /// Keep separate liquid bodies apart on the grid (`solver.separate_bodies`).
     pub separate_bodies: bool,
+    /// Open the particle-free gaps between two liquid surfaces (`solver.open_gaps`).
+    pub open_gaps: bool,
     /// Pressure PCG stopping rule.
     pub pressure: PcgParams,
     /// Viscosity PCG stopping rule.
@@ -143,6 +145,7 @@ impl StepParams {
             flip: s.solver.flip,
             surface_radius: s.solver.surface_radius,
             separate_bodies: s.solver.separate_bodies,
+            open_gaps: s.solver.open_gaps,
             pressure: PcgParams {
                 tolerance: s.solver.pressure_tolerance,
                 max_iterations: s.solver.pressure_max_iterations,
@@ -391,6 +394,7 @@ pub fn step(
             p.margin,
             p.surface_radius,
             p.separate_bodies,
+            p.open_gaps,
             c,
         )
     });

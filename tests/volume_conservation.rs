@@ -55,7 +55,11 @@ fn mass_is_conserved_and_no_particle_enters_a_solid_with_large_frame_steps() {
                 "frame {}: particle at {x:?} inside the sphere (φ = {phi})",
                 r.frame
             );
-            assert!(x.x > 0.0 && x.x < 0.4 && x.y > 0.0 && x.y < 0.3 && x.z > 0.0 && x.z < 0.1);
+            assert!(
+                x.x > 0.0 && x.x < 0.4 && x.y > 0.0 && x.y < 0.3 && x.z > 0.0 && x.z < 0.1,
+                "frame {}: particle at {x:?} outside the box",
+                r.frame
+            );
         }
         let div = max_divergence(&s.state.grid);
         assert!(

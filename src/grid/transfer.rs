@@ -91,6 +91,7 @@ pub fn particles_to_grid(
     sort: &CellSort,
     surface_radius: Real,
     labels: Option<&[u32]>,
+    open_gaps: bool,
     affine: Option<&[[Vec3; 3]]>,
 ) -> Valid {
     let ns = grid.slots();
@@ -103,11 +104,17 @@ pub fn particles_to_grid(
     }
     // one gather over the 27 cells around each slot gives its three lower
     // faces (weights relative to the slot's lower corner) and φ at its centre
-    let per_slot: Vec<([Real; 3], [u8; 3], Real, u32)> = (0..ns)
+    let per_slot: Vec<([Real; 3], [u8; 3], Real, u32, Vec3)> = (0..ns)
         .into_par_iter()
         .map(|s| {
             if !g.in_domain(s) {
-                return ([0.0; 3], [0; 3], g.dx, u32::MAX);
+                return (
+                    [0.0; 3],
+                    [0; 3],
+                    g.dx,
+                    u32::MAX,
+                    Vec3::repeat(Real::INFINITY),
+                );
             }
             let c = g.cell(s);
             let corner = Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real);
@@ -116,6 +123,8 @@ pub fn particles_to_grid(
             let mut d2min = Real::INFINITY;
             // body of the nearest volume particle (`body_labels`)
             let mut body = u32::MAX;
+            // offset of the nearest particle from the centre (cells)
+            let mut near = Vec3::repeat(Real::INFINITY);
             for dz in -1..=1isize {
                 for dy in -1..=1isize {
                     for dxi in -1..=1isize {
@@ -150,6 +159,7 @@ pub fn particles_to_grid(
                             let d2 = e.norm_squared();
                             if d2 < d2min {
                                 d2min = d2;
+                                near = e;
                                 body = labels.map_or(u32::MAX, |l| l[p]);
                             }
                         }
@@ -164,7 +174,7 @@ pub fn particles_to_grid(
                     f[a] = 1;
                 }
             }
-            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx), body)
+            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx), body, near)
         })
         .collect();
     let mut valid: Valid = Default::default();
@@ -188,6 +198,15 @@ pub fn particles_to_grid(
                     })
             })
             .collect();
+        for (p, &is_gap) in phi.iter_mut().zip(&gap) {
+            if is_gap {
+                *p = 0.01 * g.dx;
+            }
+        }
+    }
+    if open_gaps {
+        let near: Vec<Vec3> = per_slot.iter().map(|x| x.4).collect();
+        let gap = gap_cells(g, sort, parts, &phi, &near);
         for (p, &is_gap) in phi.iter_mut().zip(&gap) {
             if is_gap {
                 *p = 0.01 * g.dx;
@@ -227,6 +246,91 @@ pub fn particles_to_grid(
     valid
 }
 
+/// The liquid cells whose centres lie in a gap between two liquid surfaces
+/// (`solver.open_gaps`). The level set reaches `surface_radius` Δx past the
+/// outermost particles, so two surfaces closer than about 2 Δx share liquid
+/// cells; the projection then keeps the particle-free liquid between them
+/// incompressible, and the surfaces stop before they touch (docs/decisions.md,
+/// "Open gaps").
+///
+/// A liquid cell is a gap cell when, with c its centre, p its nearest volume
+/// particle (`near`: offset from c in cells, ∞ when none is in the 27 cells
+/// around) and r = |p − c|:
+/// - c is clear of the particles: r > 0.35 Δx (inside the liquid, particles
+///   spaced Δx/3 or closer leave no such hole);
+/// - a particle q lies on the other side: the segment pq passes within r/2
+///   of c (the nearest such q within two cells is taken; searched only when
+///   the nearest particle of one of the 26 cells around lies across c);
+/// - the gap is a slab, not a hole: no particle within 1.5 Δx of c lies
+///   within r/2 of the plane through c normal to pq.
+///
+/// Only cells clear of particles are opened, so a lone body's grid does not
+/// change (a cell outside one convex or flat surface has particles on one
+/// side only) and no liquid that holds particles is taken from the pressure
+/// solve. A gap narrower than about 1.7 Δx may have every cell centre within
+/// 0.35 Δx of a particle and stays joined. The rule needs no notion of
+/// bodies, so it also opens the gap above the point where two jets have
+/// joined, which `separate_bodies` cannot.
+pub fn gap_cells(
+    g: &MacGrid,
+    sort: &CellSort,
+    parts: &Particles,
+    phi: &[Real],
+    near: &[Vec3],
+) -> Vec<bool> {
+    let inv_dx = 1.0 / g.dx;
+    (0..g.slots())
+        .into_par_iter()
+        .map(|s| {
+            let p = near[s];
+            let d2 = p.norm_squared();
+            if !g.in_domain(s) || phi[s] >= 0.0 || d2 <= 0.35 * 0.35 {
+                return false;
+            }
+            let r = d2.sqrt();
+            let c = g.cell(s);
+            let across = (0..27isize).any(|d| {
+                let o = [d / 9 - 1, d / 3 % 3 - 1, d % 3 - 1];
+                g.slot(c[0] + o[0], c[1] + o[1], c[2] + o[2])
+                    .is_some_and(|t| {
+                        let pt = near[t] + Vec3::new(o[0] as Real, o[1] as Real, o[2] as Real);
+                        pt.iter().all(|v| v.is_finite()) && pt.dot(&p) < 0.0
+                    })
+            });
+            if !across {
+                return false;
+            }
+            let centre = Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real) + Vec3::repeat(0.5);
+            let around = || {
+                (0..125isize)
+                    .filter_map(move |d| {
+                        g.slot(c[0] + d / 25 - 2, c[1] + d / 5 % 5 - 2, c[2] + d % 5 - 2)
+                    })
+                    .flat_map(|u| sort.in_slot(u).iter())
+                    .map(move |&i| (parts.x[i as usize] - g.origin) * inv_dx - centre)
+            };
+            // the nearest particle across c from p
+            let mut best: Option<(Real, Vec3)> = None;
+            for q in around() {
+                let dq = q.norm_squared();
+                if q.dot(&p) >= 0.0 || best.is_some_and(|(b, _)| b <= dq) {
+                    continue;
+                }
+                let pq = q - p;
+                let l = (-p).dot(&pq) / pq.norm_squared();
+                if (p + pq * l.clamp(0.0, 1.0)).norm_squared() < 0.25 * d2 {
+                    best = Some((dq, q));
+                }
+            }
+            let Some((_, q)) = best else {
+                return false;
+            };
+            let n = (q - p).normalize();
+            !around().any(|x| x.norm_squared() < 2.25 && x.dot(&n).abs() < 0.5 * r)
+        })
+        .collect()
+}
+
 /// Algorithm 1 step 5 as one stage: allocate the blocks within `margin`
 /// cells of the particles, compute the cut-cell face weights, sort the
 /// particles by cell, gather the face velocities and the level set, extend the
@@ -238,6 +342,7 @@ pub fn transfer_to_grid(
     margin: usize,
     surface_radius: Real,
     separate_bodies: bool,
+    open_gaps: bool,
     affine: Option<&[[Vec3; 3]]>,
 ) {
     grid.activate(&parts.x, margin);
@@ -250,6 +355,7 @@ pub fn transfer_to_grid(
         &sort,
         surface_radius,
         labels.as_deref(),
+        open_gaps,
         affine,
     );
     extrapolate(grid, &mut valid, margin + 1);
@@ -431,5 +537,90 @@ mod tests {
         assert_eq!(l[54], u32::MAX);
         let l = labels(0.01);
         assert!(l[..54].iter().all(|&b| b == l[0]));
+    }
+
+    /// Liquid cells of two slabs of volume particles (spacing Δx/3) whose
+    /// facing layers are `gap` apart, `second` false for the first slab alone:
+    /// (φ < 0 per slot, cell centres).
+    fn slabs(gap: Real, second: bool, open_gaps: bool) -> (Vec<bool>, Vec<Vec3>) {
+        let dx = 0.05;
+        let s = dx / 3.0;
+        let mut p = Particles::default();
+        let mut slab = |x0: Real, x1: Real| {
+            let n = ((x1 - x0) / s).round() as usize;
+            for i in 0..=n {
+                for j in 0..=24 {
+                    for k in 0..=24 {
+                        let x =
+                            Vec3::new(x0 + s * i as Real, 0.3 + s * j as Real, 0.3 + s * k as Real);
+                        p.push(x, Vec3::zeros(), 1.0, 0.1, Codim::Volume);
+                    }
+                }
+            }
+        };
+        slab(0.2, 0.45);
+        if second {
+            slab(0.45 + gap, 0.75);
+        }
+        let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.0), dx);
+        transfer_to_grid(
+            &mut g,
+            &p,
+            &SolidSet::default(),
+            2,
+            1.0,
+            false,
+            open_gaps,
+            None,
+        );
+        let liquid = (0..g.slots())
+            .map(|t| g.in_domain(t) && g.phi[t] < 0.0)
+            .collect();
+        let centre = (0..g.slots()).map(|t| g.cell_pos(t)).collect();
+        (liquid, centre)
+    }
+
+    #[test]
+    fn open_gaps_separate_close_surfaces_and_leave_one_body_alone() {
+        let dx = 0.05;
+        // a lone slab: the rule finds no gap anywhere
+        assert_eq!(slabs(0.0, false, true), slabs(0.0, false, false));
+        for gap in [1.0 * dx, 1.2 * dx, 1.6 * dx, 1.9 * dx, 2.2 * dx] {
+            // rows along x through the middle of the slabs that are liquid all
+            // the way across the gap (the two slabs joined on the grid)
+            let joined = |open: bool| {
+                let (liquid, c) = slabs(gap, true, open);
+                let mut rows = std::collections::BTreeMap::new();
+                for t in 0..liquid.len() {
+                    let x = c[t].x;
+                    if x > 0.45
+                        && x < 0.45 + gap
+                        && (0.35..0.65).contains(&c[t].y)
+                        && (0.35..0.65).contains(&c[t].z)
+                    {
+                        let key = ((c[t].y / dx) as i64, (c[t].z / dx) as i64);
+                        *rows.entry(key).or_insert(true) &= liquid[t];
+                    }
+                }
+                assert!(!rows.is_empty());
+                rows.values().filter(|&&all| all).count()
+            };
+            assert!(joined(false) > 0, "gap {gap}: the level sets do not meet");
+            assert_eq!(
+                joined(true),
+                0,
+                "gap {gap}: the slabs are joined on the grid"
+            );
+            // the slabs' interiors stay liquid
+            let (liquid, c) = slabs(gap, true, true);
+            let inside = (0..liquid.len())
+                .filter(|&t| {
+                    (c[t].x > 0.2 + 0.5 * dx && c[t].x < 0.45 - 1.5 * dx)
+                        && (0.35..0.65).contains(&c[t].y)
+                        && (0.35..0.65).contains(&c[t].z)
+                })
+                .collect::<Vec<_>>();
+            assert!(!inside.is_empty() && inside.iter().all(|&t| liquid[t]));
+        }
     }
 }

@@ -149,6 +149,10 @@ pub struct SolverSettings {
     /// (`grid::transfer::body_labels`).
     #[serde(default)]
     pub separate_bodies: bool,
+    /// Particle-free liquid cells between two liquid surfaces are air
+    /// (`grid::transfer::gap_cells`), so approaching surfaces meet.
+    #[serde(default = "default_true")]
+    pub open_gaps: bool,
 }
 
 /// Particle–grid velocity transfer scheme.
@@ -325,6 +329,9 @@ fn default_tol() -> f64 {
 fn default_iters() -> u32 {
     1000
 }
+fn default_true() -> bool {
+    true
+}
 fn default_surface_radius() -> f64 {
     0.75
 }
@@ -355,6 +362,7 @@ impl Default for SolverSettings {
             viscosity_max_iterations: default_iters(),
             surface_radius: default_surface_radius(),
             separate_bodies: false,
+            open_gaps: true,
         }
     }
 }
