@@ -83,6 +83,10 @@ pub struct Fallbacks {
     /// chosen one failed to converge.
     #[serde(default)]
     pub coupling_method_switches: u64,
+    /// Constraint faces released around enclosed cells whose null mode the
+    /// particles did not pin (`Constraints::release_enclosed`).
+    #[serde(default)]
+    pub released_faces: u64,
 }
 
 /// One frame's record.
