@@ -166,9 +166,6 @@ fn base_record(frame: u32, time: Real, p: &Particles) -> FrameRecord {
     }
 }
 
-/// Emits every jet's layers of [t0, t1) before the substep [t0, t1), placed
-/// at their free-flight positions at t0 (the substep carries them on); keeps
-/// the APIC matrices aligned. Returns the number of particles added.
 fn after_halvings(n: u32) -> String {
     if n == 0 {
         String::new()
@@ -187,6 +184,9 @@ fn retry_with_half_step(e: &StepError) -> bool {
     !matches!(e, StepError::Film(_))
 }
 
+/// Emits every jet's layers of [t0, t1) before the substep [t0, t1), placed
+/// at their free-flight positions at t0 (the substep carries them on); keeps
+/// the APIC matrices aligned. Returns the number of particles added.
 fn emit_jets(jets: &[Jet], t0: Real, t1: Real, st: &mut SimState) -> usize {
     let n: usize = jets
         .iter()

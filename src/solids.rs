@@ -166,27 +166,17 @@ impl SolidSet {
         }
     }
 
-    /// Moves `x` out of the solids to signed distance at least `margin`.
-    /// Returns true when the point was inside (a counted correction).
+    /// Moves `x` out of the solids to signed distance at least `margin`
+    /// ([`Self::push_out_in_box`] with no box). Returns true when the point
+    /// was inside (a counted correction).
     pub fn push_out(&self, x: &mut Vec3, margin: Real, h: Real) -> bool {
-        if self.shapes.is_empty() {
-            return false;
-        }
-        let mut moved = false;
-        for _ in 0..8 {
-            let p = self.phi(x);
-            if p >= margin {
-                break;
-            }
-            let n = self.normal(x, h);
-            *x += n * (margin - p);
-            moved = true;
-        }
-        moved
+        let far = Vec3::repeat(Real::INFINITY);
+        self.push_out_in_box(x, &-far, &far, margin, h).0
     }
 
-    /// [`Self::push_out`] for a point that must also stay in the box
-    /// `[lo + margin, hi − margin]`: the point is clamped to the box, and the
+    /// Moves `x` out of the solids to signed distance at least `margin`
+    /// while keeping it in the box `[lo + margin, hi − margin]`: the point
+    /// is clamped to the box, and the
     /// push along the solid's normal drops the components that point out
     /// through a wall the point lies on, so a point where a solid meets a
     /// wall slides along the wall instead of bouncing between the two.

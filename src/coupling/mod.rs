@@ -511,67 +511,6 @@ fn solve_form(
         }
     }
     let s = bicgstab(&a, &sys.rhs, &mut x, &ilu, &prm.solver);
-    if s.is_err() && std::env::var("CFX_DIAG").is_ok() {
-        let mut r = sys.rhs.clone();
-        for i in 0..a.nrows {
-            for kk in a.row_ptr[i]..a.row_ptr[i + 1] {
-                r[i] -= a.val[kk] * x[a.col[kk]];
-            }
-        }
-        let mut idx: Vec<usize> = (0..a.nrows).collect();
-        idx.sort_by(|&i, &j| r[j].abs().partial_cmp(&r[i].abs()).unwrap());
-        let bn = sys.rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
-        eprintln!(
-            "diag {form:?}: n {} |b| {bn:e} |r| {:e} qo {} uo {} mo {} nq {} np {} nk {}",
-            a.nrows,
-            r.iter().map(|v| v * v).sum::<f64>().sqrt(),
-            sys.qo,
-            sys.uo,
-            sys.mo,
-            sys.nq,
-            sys.np,
-            sys.nk
-        );
-        let mut inv = vec![usize::MAX; sys.np];
-        for i in 0..sys.np {
-            inv[(sys.u_row(i, 0) - sys.uo) / 3] = i;
-        }
-        for &i in idx.iter().take(12) {
-            let kind = if i >= sys.qo && i < sys.qo + sys.nq {
-                let c = grid.cell_pos(full.cells[i - sys.qo]);
-                format!("q cell {:?}", [c.x, c.y, c.z])
-            } else if i >= sys.mo && i < sys.mo + sys.nk {
-                let (ax, sl) = k.faces[i - sys.mo];
-                let c = grid.cell_pos(sl);
-                format!(
-                    "mu face ax {ax} {:?} theta {} w {}",
-                    [c.x, c.y, c.z],
-                    k.mass[i - sys.mo],
-                    k.weight[i - sys.mo]
-                )
-            } else {
-                let pi = inv[(i - sys.uo) / 3];
-                format!(
-                    "u particle {pi} x {:?} m {:e} S {:e} fixed {}",
-                    surf.nb.x[pi], surf.mass[pi], surf.area[pi], surf.fixed[pi]
-                )
-            };
-            let diag = (a.row_ptr[i]..a.row_ptr[i + 1])
-                .find(|&kk| a.col[kk] == i)
-                .map(|kk| a.val[kk])
-                .unwrap_or(0.0);
-            let mx = a.val[a.row_ptr[i]..a.row_ptr[i + 1]]
-                .iter()
-                .fold(0.0f64, |m, v| m.max(v.abs()));
-            eprintln!(
-                "  row {i} r {:e} b {:e} x {:e} diag {diag:e} max {mx:e} nnz {} {kind}",
-                r[i],
-                sys.rhs[i],
-                x[i],
-                a.row_ptr[i + 1] - a.row_ptr[i]
-            );
-        }
-    }
     info.solve_s += t.elapsed().as_secs_f64();
     let s = s.map_err(solve_err(match form {
         Form::Monolithic => "coupled system BiCGSTAB (monolithic)",

@@ -184,6 +184,12 @@ pub fn particles_to_grid(
         valid[a] = per_slot.iter().map(|x| x.1[a]).collect();
     }
     let mut phi: Vec<Real> = per_slot.iter().map(|x| x.2).collect();
+    // the cells flagged by a separation rule become air, just outside the surface
+    let make_air = |phi: &mut [Real], gap: &[bool]| {
+        for (p, _) in phi.iter_mut().zip(gap).filter(|(_, &is_gap)| is_gap) {
+            *p = 0.01 * g.dx;
+        }
+    };
     if labels.is_some() {
         // a liquid cell beside a liquid cell of another body is air: the two
         // bodies stay apart on the grid until their particles meet
@@ -198,20 +204,12 @@ pub fn particles_to_grid(
                     })
             })
             .collect();
-        for (p, &is_gap) in phi.iter_mut().zip(&gap) {
-            if is_gap {
-                *p = 0.01 * g.dx;
-            }
-        }
+        make_air(&mut phi, &gap);
     }
     if open_gaps {
         let near: Vec<Vec3> = per_slot.iter().map(|x| x.4).collect();
         let gap = gap_cells(g, sort, parts, &phi, &near);
-        for (p, &is_gap) in phi.iter_mut().zip(&gap) {
-            if is_gap {
-                *p = 0.01 * g.dx;
-            }
-        }
+        make_air(&mut phi, &gap);
     }
     // The distance to the nearest particle is not a distance to the surface
     // deep inside the liquid; one Jacobi pass of the Lipschitz bound
