@@ -532,6 +532,7 @@ impl Sim {
                 rec.surface = c.counts;
                 rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
                 rec.fallbacks.released_faces += c.released_faces as u64;
+                rec.fallbacks.outlier_resolves += c.outlier_rounds as u64;
                 rec.warm_starts += (c.warm_seeded > 0) as u32;
             }
             rec.liquid_volume = info.liquid_volume;

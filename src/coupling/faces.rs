@@ -30,10 +30,6 @@ use rayon::prelude::*;
 /// face is left to the pressure and the solid's free-slip condition.
 pub const MIN_OPEN: Real = 0.1;
 
-/// Smallest pinning ‖A z‖² of an enclosed cell's null mode before its
-/// constraint faces are released ([`Constraints::release_enclosed`]).
-pub const MIN_PIN: Real = 1e-2;
-
 /// The constraint faces (rows of K) and J, in (axis, slot) order.
 #[derive(Clone, Debug, Default)]
 pub struct Constraints {
@@ -117,106 +113,6 @@ impl Constraints {
     }
 }
 
-impl Constraints {
-    /// Releases the constraint faces of a liquid cell whose six neighbours
-    /// are liquid, whose every open face is a constraint (or prescribed)
-    /// face, which holds a sheet particle (`x`: the sheet particles) and
-    /// whose null mode the particles do not pin. Raising such a cell's q by
-    /// one and lowering the impulses of its faces by s_{c,f} leaves every
-    /// cell and face row of eq. (24) unchanged; only the particle rows see
-    /// it, through −Σ_f J_{f,i} w_f s_{c,f}. A surface layer's particles sit
-    /// on one side of the cell and pin the mode (‖A z‖² ≥ 0.084 in the
-    /// resting-droplet and l = 2 tests, ≥ 0.069 in the droplet collision);
-    /// a sheet particle trapped inside the liquid near the cell's centre has
-    /// equal weights on opposite faces and does not (‖A z‖² = 0): BiCGSTAB
-    /// then stagnates (the droplet collision at frame 93 stopped at a
-    /// relative residual 9.5e-3, with q = 49 in that cell). Cells with
-    /// ‖A z‖² < [`MIN_PIN`] lose their constraint faces, which become plain
-    /// Poisson faces between two liquid cells. Returns the number of faces
-    /// released.
-    pub fn release_enclosed(&mut self, g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> usize {
-        let n = self.len();
-        let mut drop = vec![false; n];
-        let mut holds_sheet = vec![false; g.slots()];
-        for p in x {
-            let c = g.cell_of(p);
-            if let Some(s) = g.slot(c[0], c[1], c[2]) {
-                holds_sheet[s] = true;
-            }
-        }
-        for &c in sys.cells.iter().filter(|&&c| holds_sheet[c]) {
-            let mut faces = Vec::with_capacity(6);
-            let mut enclosed = true;
-            'axes: for a in 0..3 {
-                for k in [0isize, 1] {
-                    let mut o = [0isize; 3];
-                    o[a] = 2 * k - 1;
-                    let Some(nb) = g.neighbor(c, o).filter(|&t| sys.unknown(t).is_some()) else {
-                        enclosed = false;
-                        break 'axes;
-                    };
-                    // the face between c and nb is the lower face of the upper cell
-                    let f = if k == 0 { c } else { nb };
-                    if g.weight[a][f] <= 0.0 || is_wall_face(g, f, a) || g.is_prescribed(a, f) {
-                        continue;
-                    }
-                    match self.index(a, f) {
-                        Some(i) => faces.push(i),
-                        None => {
-                            enclosed = false;
-                            break 'axes;
-                        }
-                    }
-                }
-            }
-            if !enclosed {
-                continue;
-            }
-            // how strongly the particles' J rows pin the cell's null mode:
-            // ‖A z‖² over the particle rows, z = (q_c = 1, μ_f = −s_{c,f})
-            let mut rows: std::collections::BTreeMap<(u32, usize), Real> = Default::default();
-            for &i in &faces {
-                let (a, f) = self.faces[i];
-                let s_cf = if f == c { -1.0 } else { 1.0 };
-                for k in self.ptr[i]..self.ptr[i + 1] {
-                    *rows.entry((self.col[k], a)).or_default() +=
-                        self.val[k] * self.weight[i] * s_cf;
-                }
-            }
-            if rows.values().map(|v| v * v).sum::<Real>() < MIN_PIN {
-                for i in faces {
-                    drop[i] = true;
-                }
-            }
-        }
-        let released = drop.iter().filter(|&&d| d).count();
-        if released == 0 {
-            return 0;
-        }
-        let old = std::mem::take(self);
-        let ns = old.of_face[0].len();
-        *self = Constraints {
-            ptr: vec![0],
-            of_face: [vec![NONE; ns], vec![NONE; ns], vec![NONE; ns]],
-            ..Default::default()
-        };
-        for f in (0..n).filter(|&f| !drop[f]) {
-            let (a, s) = old.faces[f];
-            self.of_face[a][s] = self.faces.len() as u32;
-            self.faces.push((a, s));
-            self.sides.push(old.sides[f]);
-            self.weight.push(old.weight[f]);
-            self.mass.push(old.mass[f]);
-            for k in old.ptr[f]..old.ptr[f + 1] {
-                self.col.push(old.col[k]);
-                self.val.push(old.val[k]);
-            }
-            self.ptr.push(self.col.len());
-        }
-        released
-    }
-}
-
 /// Finds the constraint faces of the sheet particles at `x` (joint indices
 /// `0..x.len()`) and builds J. Deterministic: entries are sorted by face,
 /// then particle.
@@ -268,48 +164,4 @@ pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
         k = e;
     }
     c
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::grid::transfer::transfer_to_grid;
-    use crate::particles::{Codim, Particles};
-    use crate::solids::SolidSet;
-
-    /// A block of liquid (volume particles spaced Δx/3) with sheet particles
-    /// at `at`: the constraint faces, and those released.
-    fn released(at: &[Vec3]) -> (usize, usize) {
-        let dx = 0.1;
-        let mut p = Particles::default();
-        for i in 0..30 {
-            for j in 0..30 {
-                for k in 0..30 {
-                    let x =
-                        Vec3::new(i as Real, j as Real, k as Real) * (dx / 3.0) + Vec3::repeat(0.2);
-                    p.push(x, Vec3::zeros(), 1.0, 0.01, Codim::Volume);
-                }
-            }
-        }
-        let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.4), dx);
-        transfer_to_grid(&mut g, &p, &SolidSet::default(), 2, 1.0, false, false, None);
-        let sys = Poisson::build(&g, &SolidSet::default(), |_, _| false);
-        let mut k = constraints(&g, &sys, at);
-        let before = k.len();
-        (before, k.release_enclosed(&g, &sys, at))
-    }
-
-    #[test]
-    fn a_sheet_particle_trapped_at_a_cell_centre_releases_its_faces() {
-        // the centre of cell (6, 6, 6), deep in the block: every face row of
-        // J holds this particle alone, so opposite faces cancel (‖A z‖ = 0)
-        let (n, r) = released(&[Vec3::repeat(0.65)]);
-        assert_eq!((n, r), (6, 6));
-        // two particles 0.1 Δx inside the cell's lower x face and the next
-        // cell's: the face rows mix them with different weights, which pins
-        // both cells' modes (‖A z‖² = 1.62 and 0.02)
-        let (n, r) = released(&[Vec3::new(0.61, 0.65, 0.65), Vec3::new(0.71, 0.65, 0.65)]);
-        assert!(n >= 7, "{n} constraint faces");
-        assert_eq!(r, 0);
-    }
 }

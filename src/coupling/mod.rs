@@ -18,8 +18,10 @@
 //! blocks decouple: the pressure is solved alone with PCG/MIC(0) and the
 //! particles with the tension solve of §6, so no coupling rows are built.
 
+pub mod band;
 pub mod codim;
 pub mod faces;
+pub mod release;
 pub mod reseed;
 pub mod surface;
 pub mod system;
@@ -35,11 +37,12 @@ use crate::mls::{FitStats, MlsError};
 use crate::particles::Particles;
 use crate::solids::SolidSet;
 use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
+pub use band::{band_correction, BAND_PROBE};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
 pub use system::IluOrder;
-use system::{assemble, Form, Scalars};
+use system::{assemble, eq24_residual, Form, Scalars};
 pub use warm::WarmStart;
 
 /// How the coupled system is solved.
@@ -153,6 +156,10 @@ pub struct CouplingInfo {
     /// Constraint faces released around interior liquid cells they enclosed
     /// ([`faces::Constraints::release_enclosed`]).
     pub released_faces: usize,
+    /// Solves redone after outlier velocities, with the constraint faces
+    /// of the enclosed cells around them released
+    /// ([`release::outlier_cells`]; at most [`MAX_OUTLIER_ROUNDS`]).
+    pub outlier_rounds: usize,
     /// Why the chosen method failed, when it did.
     #[serde(skip)]
     pub first_failure: Option<String>,
@@ -187,10 +194,29 @@ pub enum CouplingError {
         /// Why the other one failed.
         second: Box<CouplingError>,
     },
+    /// The solution still jumps by more than the substep's physical
+    /// velocity scale allows ([`release::outlier_bound`]) after the
+    /// enclosed cells around the outliers lost their constraint faces.
+    #[error(
+        "coupled solve: velocity jump beyond {bound:.3} m/s at ({:.4}, {:.4}, {:.4}) m after {rounds} rounds of releasing constraint faces",
+        at[0], at[1], at[2]
+    )]
+    Outlier {
+        /// Centre of the first outlier cell (m).
+        at: Vec3,
+        /// The bound (m/s).
+        bound: Real,
+        /// Rounds of releases done.
+        rounds: usize,
+    },
     /// The uncoupled pressure solve failed.
     #[error("pressure projection: {0}")]
     Pressure(NotFinite),
 }
+
+/// Solves redone after outliers before a substep fails
+/// ([`CouplingError::Outlier`]).
+pub const MAX_OUTLIER_ROUNDS: usize = 3;
 
 fn solve_err(stage: &'static str) -> impl Fn(SolveError) -> CouplingError {
     move |source| CouplingError::Solve { stage, source }
@@ -219,15 +245,7 @@ pub fn solve(
     info.fits = surf.fits;
     let t = Instant::now();
     let full = Poisson::build(grid, solids, |_, _| false);
-    let mut k = faces::constraints(grid, &full, &surf.nb.x[..surf.n_sheet()]);
-    info.released_faces = k.release_enclosed(grid, &full, &surf.nb.x[..surf.n_sheet()]);
-    if prm.face_mass == FaceMass::Sheet {
-        if let Some(s) = volume_spacing(parts, prm.surface.density) {
-            k.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
-        }
-    }
     info.cells = full.cells.len();
-    info.faces = k.len();
     info.theta_clamps = full.theta_clamps;
     let sc = Scalars {
         dt,
@@ -236,92 +254,107 @@ pub fn solve(
         density: prm.surface.density,
         dx: grid.dx,
     };
-    if k.is_empty() {
-        // no coupling rows: the two blocks are independent
-        info.assemble_s = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let p =
-            project_liquid(grid, solids, prm.pressure, layers).map_err(CouplingError::Pressure)?;
-        info.iterations = p.solve.iterations as usize;
-        info.rel_residual = p.solve.rel_residual;
-        if !surf.is_empty() {
-            let sys = TensionSystem {
-                laplacian: surf.laplacian.as_ref(),
-                mass: &surf.mass,
-                area: &surf.area,
-                x: &surf.nb.x,
-                u: &surf.u,
-                f_explicit: &surf.force,
-                fixed: &surf.fixed,
-                drag: &[],
-                nu: prm.surface.viscosity / prm.surface.density,
-                sigma: prm.surface.sigma,
-                dt,
-                curvature: CurvaturePart::Normal {
-                    axes: &surf.axes,
-                    n_sheet: surf.n_sheet(),
-                },
+    let sheets = &surf.nb.x[..surf.n_sheet()];
+    let constrained = faces::constraints(grid, &full, sheets);
+    // the velocity jump no substep makes physically (release::outlier_bound)
+    let v_ref = grid
+        .u
+        .iter()
+        .flat_map(|c| c.iter())
+        .chain(parts.v.iter().flat_map(|v| v.iter()))
+        .fold(0.0 as Real, |m, v| m.max(v.abs()));
+    let bound = release::outlier_bound(v_ref, sc.sigma, sc.density, sc.dx);
+    // cells around which the solve found outliers (release::outlier_cells)
+    let mut around: Vec<usize> = Vec::new();
+    let (k, vstar, sys, x, kept) = loop {
+        let mut k = constrained.clone();
+        info.released_faces = k.release_enclosed(grid, &full, sheets);
+        if !around.is_empty() {
+            info.released_faces += k.release_around(grid, &full, &around);
+        }
+        if prm.face_mass == FaceMass::Sheet {
+            if let Some(s) = volume_spacing(parts, prm.surface.density) {
+                k.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
+            }
+        }
+        info.faces = k.len();
+        if k.is_empty() {
+            return solve_uncoupled(grid, solids, parts, prm, dt, layers, &surf, info, t);
+        }
+        let mut vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
+        // K v = K (J u + c): in the face rows, v** − c takes the place of v**
+        let band = match prm.band {
+            BandVelocity::Extrapolated => band_correction(grid, &surf, &k),
+            BandVelocity::Sheet => vec![0.0; k.len()],
+        };
+        for (v, c) in vstar.iter_mut().zip(&band) {
+            *v -= c;
+        }
+        // the chosen method; if its solve fails, the other one (counted)
+        let order = match prm.method {
+            Method::Monolithic => [Form::Monolithic, Form::Reduced],
+            Method::Schur => [Form::Reduced, Form::Monolithic],
+        };
+        let mut attempt = None;
+        for (n, form) in order.into_iter().enumerate() {
+            let t = if n == 0 && around.is_empty() {
+                t
+            } else {
+                Instant::now()
             };
-            let sol = solve_tension(&sys, &prm.solver).map_err(solve_err("surface tension"))?;
-            info.iterations += sol.info.iter().map(|s| s.iterations).sum::<usize>();
-            info.rel_residual = sol
-                .info
-                .iter()
-                .fold(info.rel_residual, |m, s| m.max(s.rel_residual));
-            write_back(parts, &surf, &sol.u);
-        }
-        info.solve_s = t.elapsed().as_secs_f64();
-        return Ok(info);
-    }
-    let mut vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
-    // K v = K (J u + c): in the face rows, v** − c takes the place of v**
-    let band = match prm.band {
-        BandVelocity::Extrapolated => band_correction(grid, &surf, &k),
-        BandVelocity::Sheet => vec![0.0; k.len()],
-    };
-    for (v, c) in vstar.iter_mut().zip(&band) {
-        *v -= c;
-    }
-    // the chosen method; if its solve fails, the other one (counted)
-    let order = match prm.method {
-        Method::Monolithic => [Form::Monolithic, Form::Reduced],
-        Method::Schur => [Form::Reduced, Form::Monolithic],
-    };
-    let mut attempt = None;
-    for (n, form) in order.into_iter().enumerate() {
-        let t = if n == 0 { t } else { Instant::now() };
-        match solve_form(
-            form,
-            grid,
-            solids,
-            &full,
-            &surf,
-            &k,
-            &vstar,
-            &band,
-            sc,
-            prm,
-            &mut info,
-            t,
-            warm.as_ref(),
-        ) {
-            Ok(r) => {
-                attempt = Some(r);
-                break;
-            }
-            Err(e) if n == 0 => {
-                info.method_fallbacks += 1;
-                info.first_failure = Some(e.to_string());
-            }
-            Err(e) => {
-                return Err(CouplingError::BothFailed {
-                    first: info.first_failure.take().unwrap_or_default(),
-                    second: Box::new(e),
-                })
+            match solve_form(
+                form,
+                grid,
+                solids,
+                &full,
+                &surf,
+                &k,
+                &vstar,
+                &band,
+                sc,
+                prm,
+                &mut info,
+                t,
+                warm.as_ref(),
+            ) {
+                Ok(r) => {
+                    attempt = Some(r);
+                    break;
+                }
+                Err(e) if n == 0 => {
+                    info.method_fallbacks += 1;
+                    info.first_failure = Some(e.to_string());
+                }
+                Err(e) => {
+                    return Err(CouplingError::BothFailed {
+                        first: info.first_failure.take().unwrap_or_default(),
+                        second: Box::new(e),
+                    })
+                }
             }
         }
-    }
-    let (sys, x, kept) = attempt.expect("a solve succeeded or returned");
+        let (sys, x, kept) = attempt.expect("a solve succeeded or returned");
+        let q = &x[sys.qo..sys.qo + sys.nq];
+        let u: Vec<Vec3> = (0..sys.np)
+            .map(|i| Vec3::new(x[sys.u_row(i, 0)], x[sys.u_row(i, 1)], x[sys.u_row(i, 2)]))
+            .collect();
+        let bad = release::outlier_cells(grid, &full, q, &surf.nb.x, &u, bound);
+        if bad.is_empty() {
+            break (k, vstar, sys, x, kept);
+        }
+        let fresh = bad.iter().any(|c| around.binary_search(c).is_err());
+        if !fresh || info.outlier_rounds == MAX_OUTLIER_ROUNDS {
+            return Err(CouplingError::Outlier {
+                at: grid.cell_pos(bad[0]),
+                bound,
+                rounds: info.outlier_rounds,
+            });
+        }
+        info.outlier_rounds += 1;
+        around.extend(bad);
+        around.sort_unstable();
+        around.dedup();
+    };
     *warm = Some(kept);
     let q = &x[sys.qo..sys.qo + sys.nq];
     let u: Vec<Vec3> = (0..sys.np)
@@ -366,65 +399,55 @@ pub fn solve(
     Ok(info)
 }
 
-/// c_f = Σ_i J_fi ((x_f − x_i)·n_i) (∂u_a/∂n)_i for each constraint face f of
-/// axis a: how much the velocity changes along the sheet normal between
-/// the sheet particles and the face ([`BandVelocity::Extrapolated`]).
-///
-/// (∂u/∂n)_i is a one-sided difference of v** (the grid velocity before the
-/// solve: u^n carried by the particles, so the correction lags one substep)
-/// between the particle and the point [`BAND_PROBE`] Δx inside the liquid
-/// along its normal, past the band of constraint faces: inside the band the
-/// grid's normal derivative is the constraint's own (zero with c = 0), so it
-/// must be read from the free liquid below. The normal is oriented by the
-/// liquid level set. A particle whose probe point is not at least Δx/2
-/// inside the liquid (a body thinner than the probe depth), and every free
-/// sheet, keeps c = 0 (the sheet's own velocity).
-pub fn band_correction(
-    grid: &MacGrid,
+/// The solve when no face is constrained: the pressure projection and the
+/// particles' tension solve are independent (no coupling rows).
+#[allow(clippy::too_many_arguments)]
+fn solve_uncoupled(
+    grid: &mut MacGrid,
+    solids: &SolidSet,
+    parts: &mut Particles,
+    prm: &CouplingParams,
+    dt: Real,
+    layers: usize,
     surf: &surface::Surface,
-    k: &faces::Constraints,
-) -> Vec<Real> {
-    use rayon::prelude::*;
-    let d = BAND_PROBE * grid.dx;
-    let phi_at = |y: &Vec3| {
-        let c = grid.cell_of(y);
-        grid.slot(c[0], c[1], c[2])
-            .map_or(Real::MAX, |s| grid.phi[s])
-    };
-    let dudn: Vec<Option<(Vec3, Vec3)>> = (0..surf.n_sheet())
-        .into_par_iter()
-        .map(|i| {
-            if !surf.attached[i] {
-                return None;
-            }
-            let x = surf.nb.x[i];
-            let n: Vec3 = surf.axes[i].column(2).into();
-            let (lo, hi) = (phi_at(&(x - d * n)), phi_at(&(x + d * n)));
-            let (n, inner) = if lo <= hi { (n, lo) } else { (-n, hi) };
-            (inner < -0.5 * grid.dx)
-                .then(|| (n, (grid.velocity(&x) - grid.velocity(&(x - d * n))) / d))
-        })
-        .collect();
-    (0..k.len())
-        .into_par_iter()
-        .map(|f| {
-            let (a, s) = k.faces[f];
-            let xf = grid.face_pos(s, a);
-            k.row(f)
-                .map(|(i, j)| match &dudn[i] {
-                    Some((n, g)) => j * n.dot(&(xf - surf.nb.x[i])) * g[a],
-                    None => 0.0,
-                })
-                .sum()
-        })
-        .collect()
+    mut info: CouplingInfo,
+    t: Instant,
+) -> Result<CouplingInfo, CouplingError> {
+    // no coupling rows: the two blocks are independent
+    info.assemble_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let p = project_liquid(grid, solids, prm.pressure, layers).map_err(CouplingError::Pressure)?;
+    info.iterations = p.solve.iterations as usize;
+    info.rel_residual = p.solve.rel_residual;
+    if !surf.is_empty() {
+        let sys = TensionSystem {
+            laplacian: surf.laplacian.as_ref(),
+            mass: &surf.mass,
+            area: &surf.area,
+            x: &surf.nb.x,
+            u: &surf.u,
+            f_explicit: &surf.force,
+            fixed: &surf.fixed,
+            drag: &[],
+            nu: prm.surface.viscosity / prm.surface.density,
+            sigma: prm.surface.sigma,
+            dt,
+            curvature: CurvaturePart::Normal {
+                axes: &surf.axes,
+                n_sheet: surf.n_sheet(),
+            },
+        };
+        let sol = solve_tension(&sys, &prm.solver).map_err(solve_err("surface tension"))?;
+        info.iterations += sol.info.iter().map(|s| s.iterations).sum::<usize>();
+        info.rel_residual = sol
+            .info
+            .iter()
+            .fold(info.rel_residual, |m, s| m.max(s.rel_residual));
+        write_back(parts, surf, &sol.u);
+    }
+    info.solve_s = t.elapsed().as_secs_f64();
+    Ok(info)
 }
-
-/// Depth (× Δx) below a sheet particle at which [`band_correction`] reads
-/// the liquid's velocity: past the band of constraint faces, which reaches
-/// about Δx inside the sheet. 1.5, 2 and 3 gave the same period within
-/// 0.5 points (`docs/decisions.md`).
-pub const BAND_PROBE: Real = 2.0;
 
 /// Spacing (m) of the volume particles, (m̄/ρ)^{1/3} from their mean mass;
 /// `None` without volume particles.
@@ -520,53 +543,6 @@ fn solve_form(
     info.rel_residual = s.rel_residual;
     let kept = WarmStart::capture(grid, reduced.as_ref().unwrap_or(full), k, &sys, &x, sc);
     Ok((sys, x, kept))
-}
-
-/// ‖b − A x‖/‖b‖ of eq. (24) in the monolithic form for a solution given as
-/// (q, u, μ).
-#[allow(clippy::too_many_arguments)]
-fn eq24_residual(
-    full: &Poisson,
-    surf: &surface::Surface,
-    k: &faces::Constraints,
-    vstar: &[Real],
-    sc: Scalars,
-    q: &[Real],
-    u: &[Vec3],
-    mu: &[Real],
-) -> Result<Real, CouplingError> {
-    let sys = assemble(
-        Form::Monolithic,
-        full,
-        surf,
-        k,
-        vstar,
-        &vec![0.0; k.len()],
-        sc,
-        IluOrder::Equation,
-        false,
-    )
-    .map_err(solve_err("eq. (24) residual"))?;
-    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
-    let mut x = vec![0.0; a.nrows];
-    x[sys.qo..sys.qo + sys.nq].copy_from_slice(q);
-    for (i, v) in u.iter().enumerate() {
-        for d in 0..3 {
-            x[sys.u_row(i, d)] = v[d];
-        }
-    }
-    for f in 0..k.len() {
-        x[sys.mo + f] = mu[f];
-    }
-    let mut ax = vec![0.0; a.nrows];
-    a.matvec(&x, &mut ax);
-    let r: Vec<Real> = sys.rhs.iter().zip(&ax).map(|(b, y)| b - y).collect();
-    let bn = crate::linsolve::norm(&sys.rhs);
-    Ok(if bn > 0.0 {
-        crate::linsolve::norm(&r) / bn
-    } else {
-        crate::linsolve::norm(&r)
-    })
 }
 
 /// u^{n+1} and the updated radii into the store (fixed particles keep theirs).

@@ -36,6 +36,7 @@
 
 use super::faces::Constraints;
 use super::surface::Surface;
+use super::{solve_err, CouplingError};
 use crate::grid::projection::Poisson;
 use crate::grid::NONE;
 use crate::linsolve::{csr::rows_from_triplets, reverse_cuthill_mckee, Csr, SolveError};
@@ -339,5 +340,52 @@ pub fn assemble(
         np,
         nk,
         slot,
+    })
+}
+
+/// ‖b − A x‖/‖b‖ of eq. (24) in the monolithic form for a solution given as
+/// (q, u, μ).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn eq24_residual(
+    full: &Poisson,
+    surf: &Surface,
+    k: &Constraints,
+    vstar: &[Real],
+    sc: Scalars,
+    q: &[Real],
+    u: &[Vec3],
+    mu: &[Real],
+) -> Result<Real, CouplingError> {
+    let sys = assemble(
+        Form::Monolithic,
+        full,
+        surf,
+        k,
+        vstar,
+        &vec![0.0; k.len()],
+        sc,
+        IluOrder::Equation,
+        false,
+    )
+    .map_err(solve_err("eq. (24) residual"))?;
+    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
+    let mut x = vec![0.0; a.nrows];
+    x[sys.qo..sys.qo + sys.nq].copy_from_slice(q);
+    for (i, v) in u.iter().enumerate() {
+        for d in 0..3 {
+            x[sys.u_row(i, d)] = v[d];
+        }
+    }
+    for f in 0..k.len() {
+        x[sys.mo + f] = mu[f];
+    }
+    let mut ax = vec![0.0; a.nrows];
+    a.matvec(&x, &mut ax);
+    let r: Vec<Real> = sys.rhs.iter().zip(&ax).map(|(b, y)| b - y).collect();
+    let bn = crate::linsolve::norm(&sys.rhs);
+    Ok(if bn > 0.0 {
+        crate::linsolve::norm(&r) / bn
+    } else {
+        crate::linsolve::norm(&r)
     })
 }

@@ -87,6 +87,10 @@ pub struct Fallbacks {
     /// particles did not pin (`Constraints::release_enclosed`).
     #[serde(default)]
     pub released_faces: u64,
+    /// Coupled solves redone after outlier velocities, with the enclosed
+    /// cells around them released (`coupling::release::outlier_cells`).
+    #[serde(default)]
+    pub outlier_resolves: u64,
 }
 
 /// One frame's record.

@@ -1,0 +1,262 @@
+//! Releasing constraint faces whose impulses eq. (24) cannot determine.
+//!
+//! A liquid cell c whose every open face is a constraint face carries a
+//! mode z = (q_c = 1, μ_f = −s_{c,f} on its faces) that leaves every cell
+//! and face row of eq. (24) unchanged (§7: the face rows hold the face
+//! velocity to J u whatever the pressure is, and the impulses take up any
+//! pressure). Only the particle rows see it, through −Σ_f J_{f,i} w_f
+//! s_{c,f}, and a sheet particle near the cell's centre, with equal weights
+//! on opposite faces, does not pin it. Two rules release such faces, which
+//! then become plain Poisson faces (to a liquid or a ghost-fluid air cell):
+//!
+//! - before the solve, [`Constraints::release_enclosed`]: cells whose mode
+//!   the particles do not pin (‖A z‖² < [`MIN_PIN`]);
+//! - after a solve, [`outlier_cells`] and [`Constraints::release_around`]:
+//!   where two surface layers face each other across a gap narrower than a
+//!   cell (liquid folding onto itself: the polygon's thick rim at frame 83),
+//!   several such cells share their faces, and the modes they combine into
+//!   are pinned only weakly (‖A z‖² of single cells 0.04–1.4 there). The
+//!   solve then returns pressures of ±90 m/s (q units) next to each other,
+//!   which launch particles at ~100 m/s. The enclosed cells around every
+//!   cell whose velocity jump is far beyond the substep's physical scales
+//!   ([`outlier_bound`]) lose their constraint faces and the solve is redone.
+
+use super::faces::Constraints;
+use crate::grid::extrapolate::is_wall_face;
+use crate::grid::projection::Poisson;
+use crate::grid::MacGrid;
+use crate::math::{Real, Vec3};
+
+/// Smallest pinning ‖A z‖² of an enclosed cell's null mode before its
+/// constraint faces are released ([`Constraints::release_enclosed`]).
+pub const MIN_PIN: Real = 1e-2;
+
+/// A velocity jump across a face larger than this multiple of the
+/// substep's velocity scale marks an outlier ([`outlier_bound`]).
+pub const OUTLIER_FACTOR: Real = 10.0;
+
+/// Largest curvature of a tension row, as in
+/// [`super::surface::MAX_CURVATURE_H`] (κ h ≤ 8 per principal direction).
+const CAPILLARY_KH: Real = 2.0 * super::surface::MAX_CURVATURE_H;
+
+impl Constraints {
+    /// The constraint faces of cell slot `c` and ‖A z‖² over the particle
+    /// rows of its null mode z = (q_c = 1, μ_f = −s_{c,f}), if every open
+    /// face of `c` is a constraint (or prescribed) face, whichever its
+    /// neighbours are (liquid or air: a constraint face to an air cell
+    /// carries the mode as well); `None` otherwise (an open face without
+    /// constraint pins the mode through the cell row).
+    pub fn null_mode(&self, g: &MacGrid, c: usize) -> Option<(Vec<usize>, Real)> {
+        let mut faces = Vec::with_capacity(6);
+        for a in 0..3 {
+            for k in [0isize, 1] {
+                let mut o = [0isize; 3];
+                o[a] = 2 * k - 1;
+                let nb = g.neighbor(c, o)?;
+                // the face between c and nb is the lower face of the upper cell
+                let f = if k == 0 { c } else { nb };
+                if g.weight[a][f] <= 0.0 || is_wall_face(g, f, a) || g.is_prescribed(a, f) {
+                    continue;
+                }
+                faces.push(self.index(a, f)?);
+            }
+        }
+        let mut rows: std::collections::BTreeMap<(u32, usize), Real> = Default::default();
+        for &i in &faces {
+            let (a, f) = self.faces[i];
+            let s_cf = if f == c { -1.0 } else { 1.0 };
+            for k in self.ptr[i]..self.ptr[i + 1] {
+                *rows.entry((self.col[k], a)).or_default() += self.val[k] * self.weight[i] * s_cf;
+            }
+        }
+        let pin = rows.values().map(|v| v * v).sum::<Real>();
+        Some((faces, pin))
+    }
+
+    /// Releases the constraint faces of every liquid cell that holds a sheet
+    /// particle (`x`: the sheet particles) and whose null mode the particles
+    /// do not pin ([`Constraints::null_mode`] with ‖A z‖² < [`MIN_PIN`]). A
+    /// surface layer's particles sit on one side of the cell and pin the
+    /// mode (‖A z‖² ≥ 0.084 in the resting-droplet and l = 2 tests, ≥ 0.069
+    /// in the droplet collision); a sheet particle trapped inside the liquid
+    /// near the cell's centre does not (‖A z‖² = 0): BiCGSTAB then stagnates
+    /// (the droplet collision at frame 93 stopped at a relative residual
+    /// 9.5e-3, with q = 49 in that cell; the polygon at frame 83 at 8e-4,
+    /// with q = ±3e9 in a cell beside air). Returns the number of faces
+    /// released.
+    pub fn release_enclosed(&mut self, g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> usize {
+        let mut holds_sheet = vec![false; g.slots()];
+        for p in x {
+            let c = g.cell_of(p);
+            if let Some(s) = g.slot(c[0], c[1], c[2]) {
+                holds_sheet[s] = true;
+            }
+        }
+        let mut drop = vec![false; self.len()];
+        for &c in sys.cells.iter().filter(|&&c| holds_sheet[c]) {
+            if let Some((faces, pin)) = self.null_mode(g, c) {
+                if pin < MIN_PIN {
+                    for i in faces {
+                        drop[i] = true;
+                    }
+                }
+            }
+        }
+        self.drop_faces(&drop)
+    }
+
+    /// Releases the constraint faces of every liquid cell within one cell
+    /// (26-neighbourhood) of the given cell slots whose every open face is
+    /// a constraint face, whatever its pin. Returns the number released.
+    pub fn release_around(&mut self, g: &MacGrid, sys: &Poisson, slots: &[usize]) -> usize {
+        let mut drop = vec![false; self.len()];
+        for &s in slots {
+            for o in (0..27isize).map(|k| [k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1]) {
+                let Some(c) = g.neighbor(s, o).filter(|&c| sys.unknown(c).is_some()) else {
+                    continue;
+                };
+                if let Some((faces, _)) = self.null_mode(g, c) {
+                    for i in faces {
+                        drop[i] = true;
+                    }
+                }
+            }
+        }
+        self.drop_faces(&drop)
+    }
+
+    /// Removes the faces marked in `drop`; returns how many.
+    fn drop_faces(&mut self, drop: &[bool]) -> usize {
+        let released = drop.iter().filter(|&&d| d).count();
+        if released == 0 {
+            return 0;
+        }
+        let old = std::mem::take(self);
+        let ns = old.of_face[0].len();
+        *self = Constraints {
+            ptr: vec![0],
+            of_face: [
+                vec![NONE_FACE; ns],
+                vec![NONE_FACE; ns],
+                vec![NONE_FACE; ns],
+            ],
+            ..Default::default()
+        };
+        for f in (0..old.len()).filter(|&f| !drop[f]) {
+            let (a, s) = old.faces[f];
+            self.of_face[a][s] = self.faces.len() as u32;
+            self.faces.push((a, s));
+            self.sides.push(old.sides[f]);
+            self.weight.push(old.weight[f]);
+            self.mass.push(old.mass[f]);
+            for k in old.ptr[f]..old.ptr[f + 1] {
+                self.col.push(old.col[k]);
+                self.val.push(old.val[k]);
+            }
+            self.ptr.push(self.col.len());
+        }
+        released
+    }
+}
+
+const NONE_FACE: u32 = crate::grid::NONE;
+
+/// The largest velocity jump across a face (m/s) that a substep of length
+/// `dt` can make physically, times [`OUTLIER_FACTOR`]: the largest speed
+/// `v_ref` before the solve (particles and the faces' v**, which hold the
+/// body forces) plus the capillary speed √(σ κ_max / ρ) of the largest
+/// curvature a tension row allows, κ_max = 16/Δx (two principal curvatures
+/// of 8/h).
+pub fn outlier_bound(v_ref: Real, sigma: Real, density: Real, dx: Real) -> Real {
+    OUTLIER_FACTOR * (v_ref + (sigma * CAPILLARY_KH / (density * dx)).sqrt())
+}
+
+/// Slots of the liquid cells across one of whose faces the scaled pressure
+/// q (m/s: the velocity change it makes) jumps by more than `bound`
+/// (to 0 across a face to air), plus the cells of the particles whose
+/// solved velocity `u` exceeds it (`x`: their positions).
+pub fn outlier_cells(
+    g: &MacGrid,
+    sys: &Poisson,
+    q: &[Real],
+    x: &[Vec3],
+    u: &[Vec3],
+    bound: Real,
+) -> Vec<usize> {
+    let mut out = Vec::new();
+    for (i, &c) in sys.cells.iter().enumerate() {
+        let bad = (0..6).any(|k| {
+            let mut o = [0isize; 3];
+            o[k / 2] = if k % 2 == 0 { -1 } else { 1 };
+            let qn = g
+                .neighbor(c, o)
+                .and_then(|n| sys.unknown(n))
+                .map_or(0.0, |n| q[n as usize]);
+            (q[i] - qn).abs() > bound
+        });
+        if bad {
+            out.push(c);
+        }
+    }
+    for (p, v) in x.iter().zip(u) {
+        if v.norm() > bound {
+            let c = g.cell_of(p);
+            if let Some(s) = g.slot(c[0], c[1], c[2]) {
+                out.push(s);
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::faces::constraints;
+    use super::*;
+    use crate::grid::transfer::transfer_to_grid;
+    use crate::particles::{Codim, Particles};
+    use crate::solids::SolidSet;
+
+    /// A block of liquid (volume particles spaced Δx/3) with sheet particles
+    /// at `at`: the constraint faces, and those released.
+    fn released(at: &[Vec3]) -> (usize, usize) {
+        let dx = 0.1;
+        let mut p = Particles::default();
+        for i in 0..30 {
+            for j in 0..30 {
+                for k in 0..30 {
+                    let x =
+                        Vec3::new(i as Real, j as Real, k as Real) * (dx / 3.0) + Vec3::repeat(0.2);
+                    p.push(x, Vec3::zeros(), 1.0, 0.01, Codim::Volume);
+                }
+            }
+        }
+        let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.4), dx);
+        transfer_to_grid(&mut g, &p, &SolidSet::default(), 2, 1.0, false, false, None);
+        let sys = Poisson::build(&g, &SolidSet::default(), |_, _| false);
+        let mut k = constraints(&g, &sys, at);
+        let before = k.len();
+        (before, k.release_enclosed(&g, &sys, at))
+    }
+
+    #[test]
+    fn a_sheet_particle_trapped_at_a_cell_centre_releases_its_faces() {
+        // the centre of cell (6, 6, 6), deep in the block: every face row of
+        // J holds this particle alone, so opposite faces cancel (‖A z‖ = 0)
+        let (n, r) = released(&[Vec3::repeat(0.65)]);
+        assert_eq!((n, r), (6, 6));
+        // two particles 0.1 Δx inside the cell's lower x face and the next
+        // cell's: the face rows mix them with different weights, which pins
+        // both cells' modes (‖A z‖² = 1.62 and 0.02)
+        let (n, r) = released(&[Vec3::new(0.61, 0.65, 0.65), Vec3::new(0.71, 0.65, 0.65)]);
+        assert!(n >= 7, "{n} constraint faces");
+        assert_eq!(r, 0);
+        // the centre of the surface cell (12, 6, 6), whose +x neighbour is
+        // air: the face to the air cell is a constraint face too, and the
+        // mode is the same (the polygon's frame 83 stalled on such a cell)
+        let (n, r) = released(&[Vec3::new(1.25, 0.65, 0.65)]);
+        assert_eq!((n, r), (6, 6));
+    }
+}
