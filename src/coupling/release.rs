@@ -219,9 +219,9 @@ mod tests {
     use crate::particles::{Codim, Particles};
     use crate::solids::SolidSet;
 
-    /// A block of liquid (volume particles spaced Δx/3) with sheet particles
-    /// at `at`: the constraint faces, and those released.
-    fn released(at: &[Vec3]) -> (usize, usize) {
+    /// The grid and pressure system of a block of liquid (volume particles
+    /// spaced Δx/3 over [0.2, 1.167]³, Δx = 0.1).
+    fn block() -> (MacGrid, Poisson) {
         let dx = 0.1;
         let mut p = Particles::default();
         for i in 0..30 {
@@ -236,9 +236,66 @@ mod tests {
         let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.4), dx);
         transfer_to_grid(&mut g, &p, &SolidSet::default(), 2, 1.0, false, false, None);
         let sys = Poisson::build(&g, &SolidSet::default(), |_, _| false);
+        (g, sys)
+    }
+
+    /// The block with sheet particles at `at`: its constraint faces, and
+    /// those [`Constraints::release_enclosed`] releases.
+    fn released(at: &[Vec3]) -> (usize, usize) {
+        let (g, sys) = block();
         let mut k = constraints(&g, &sys, at);
         let before = k.len();
         (before, k.release_enclosed(&g, &sys, at))
+    }
+
+    #[test]
+    fn outliers_are_found_and_the_enclosed_cells_around_them_released() {
+        let (g, sys) = block();
+        let slot = |c: [isize; 3]| g.slot(c[0], c[1], c[2]).unwrap();
+        // the polygon's bound: v_ref 1.05 m/s, σ 0.05, Δx = 1/480
+        let b = outlier_bound(1.05, 0.05, 1000.0, 1.0 / 480.0);
+        assert!((b - 10.0 * (1.05 + (0.05 * 16.0 * 480.0 / 1000.0 as Real).sqrt())).abs() < 1e-12);
+        assert!(b > 16.0 && b < 17.0, "{b}");
+        // hydrostatic-like smooth q (jumps of 0.5 m/s per cell) is no outlier
+        let q: Vec<Real> = sys
+            .cells
+            .iter()
+            .map(|&c| 0.5 * g.cell_pos(c)[1] / g.dx)
+            .collect();
+        let smooth = outlier_cells(&g, &sys, &q, &[], &[], 10.0);
+        assert!(smooth.is_empty(), "{smooth:?}");
+        let q0 = vec![0.0; sys.cells.len()];
+        // a spike of 50 in one cell marks it and its six neighbours
+        let mut q = q0.clone();
+        let c = slot([6, 6, 6]);
+        q[sys.unknown(c).unwrap() as usize] = 50.0;
+        let bad = outlier_cells(&g, &sys, &q, &[], &[], 10.0);
+        assert_eq!(bad.len(), 7, "{bad:?}");
+        assert!(bad.contains(&c));
+        // a particle faster than the bound marks its cell
+        let x = [Vec3::new(0.45, 0.55, 0.65)];
+        let bad = outlier_cells(&g, &sys, &q0, &x, &[Vec3::new(0.0, 12.0, 0.0)], 10.0);
+        assert_eq!(bad, vec![slot([4, 5, 6])]);
+        // sheet particles a third of a cell off the centres of a 3×3×3 group
+        // of cells: each cell is enclosed by constraint faces and pinned
+        // (release_enclosed keeps them); release_around frees the group
+        let mut at = Vec::new();
+        for i in 5..8 {
+            for j in 5..8 {
+                for k in 5..8 {
+                    at.push(Vec3::new(i as Real + 0.5, j as Real + 0.8, k as Real + 0.5) * g.dx);
+                }
+            }
+        }
+        let mut kc = constraints(&g, &sys, &at);
+        assert_eq!(kc.clone().release_enclosed(&g, &sys, &at), 0);
+        let before = kc.len();
+        let n = kc.release_around(&g, &sys, &[c]);
+        assert!(n > 0 && kc.len() == before - n, "{n} of {before}");
+        assert!(
+            kc.null_mode(&g, c).is_none(),
+            "the outlier cell keeps no enclosed mode"
+        );
     }
 
     #[test]
