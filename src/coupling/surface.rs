@@ -53,7 +53,8 @@ pub struct SurfaceCounts {
     /// Filament ends.
     pub buds: usize,
     /// Rows dropped because their curvature exceeded [`MAX_CURVATURE_H`]/h
-    /// or their weights [`MAX_ROW_WEIGHT_H2`]/h².
+    /// or their weights [`MAX_ROW_WEIGHT_H2`]/h², or whose diagonal was not
+    /// negative.
     #[serde(default)]
     pub curvature_clamps: usize,
     /// Sheet half thicknesses and filament radii clamped to the radius of
@@ -232,7 +233,10 @@ pub fn particle_terms(
 
 /// Drops (zeroes) the tension rows whose weights or curvature the sampling
 /// cannot resolve: Σ_j |L_ij| h² above [`MAX_ROW_WEIGHT_H2`] or a normal
-/// curvature above [`MAX_CURVATURE_H`]/h. A fit through a degenerate
+/// curvature above [`MAX_CURVATURE_H`]/h, or a diagonal L_ii ≥ 0 (an
+/// anti-diffusive row: at the chain's sheet rim L_ii h² = +4.3 made the
+/// diagonal of a particle's implicit row −m̂ + ĉL_ii = +0.002 and sent it
+/// off at 13 m/s). A fit through a degenerate
 /// neighbourhood (the first two rings of a jet's sheet layer, a thin ribbon)
 /// can be full rank and still give such a row; it would make the tension
 /// explode and the system unsolvable. Its particle gets no tension this
@@ -266,7 +270,16 @@ pub fn clamp_rows(
                 };
                 let weight: Real =
                     v[rp[i]..rp[i + 1]].iter().map(|w| w.abs()).sum::<Real>() * h * h;
-                !(kn <= kmax && weight <= MAX_ROW_WEIGHT_H2)
+                // a diffusion row has a negative diagonal; with a positive
+                // one the implicit term σΔt²S L_ii cancels the mass on the
+                // diagonal of eq. (16)/(24) as Δt grows, and the particle's
+                // velocity blows up
+                let diag: Real = (rp[i]..rp[i + 1])
+                    .filter(|&k| ci[k] == i)
+                    .map(|k| v[k])
+                    .sum();
+                let anti = weight > 0.0 && diag >= 0.0;
+                !(kn <= kmax && weight <= MAX_ROW_WEIGHT_H2) || anti
             })
             .collect();
         (rp, bad)
@@ -348,4 +361,45 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
         counts,
         nb,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::sparse::Triplet;
+
+    #[test]
+    fn anti_diffusive_tension_rows_are_dropped() {
+        // five sheet particles of a flat sheet: a centre and four neighbours
+        let h = 0.01;
+        let s = 0.4 * h;
+        let x = vec![
+            Vec3::zeros(),
+            Vec3::new(s, 0.0, 0.0),
+            Vec3::new(-s, 0.0, 0.0),
+            Vec3::new(0.0, s, 0.0),
+            Vec3::new(0.0, -s, 0.0),
+        ];
+        let nb = Neighborhoods::build(&x, &[Codim::Sheet; 5], h).unwrap();
+        let axes = vec![crate::math::Mat3::identity(); 5];
+        // row 0: a five-point Laplacian (diagonal −4/s², the others 1/s²);
+        // row 1: the same weights negated, diagonal +4/s² (anti-diffusive)
+        let mut t = Vec::new();
+        for (r, sign) in [(0usize, 1.0), (1, -1.0)] {
+            for j in 0..5 {
+                let w = if j == r { -4.0 } else { 1.0 } / (s * s);
+                t.push(Triplet::new(r, j, sign * w));
+            }
+        }
+        let mut m = SparseRowMat::try_new_from_triplets(5, 5, &t).unwrap();
+        // weights Σ|L|h² = 8 h²/s² = 50 (below the weight bound), curvature 0
+        assert_eq!(clamp_rows(&mut m, &nb, &axes, h), 1);
+        let r = m.as_ref();
+        let row = |i: usize| {
+            let rp = r.symbolic().row_ptr();
+            r.val()[rp[i]..rp[i + 1]].to_vec()
+        };
+        assert!(row(0).iter().all(|v| *v != 0.0));
+        assert!(row(1).iter().all(|v| *v == 0.0));
+    }
 }
