@@ -107,27 +107,24 @@ mod tests {
         let mut p = Particles::default();
         // a point 1 cm from the x = 1 wall flying at it (and along y);
         // a filament particle in the open; a point at the corner x = z = 0
-        let a = p.push(
-            Vec3::new(0.99, 0.5, 0.5),
-            Vec3::new(5.0, 2.0, 0.0),
-            1.0,
-            0.01,
-            Codim::Point,
-        );
-        let b = p.push(
-            Vec3::new(0.5, 0.5, 0.5),
-            Vec3::new(5.0, 2.0, 0.0),
-            1.0,
-            0.01,
-            Codim::Filament,
-        );
-        let c = p.push(
-            Vec3::new(0.01, 0.5, 0.01),
-            Vec3::new(-3.0, 1.0, -4.0),
-            1.0,
-            0.01,
-            Codim::Point,
-        );
+        let start = [
+            (
+                Vec3::new(0.99, 0.5, 0.5),
+                Vec3::new(5.0, 2.0, 0.0),
+                Codim::Point,
+            ),
+            (
+                Vec3::new(0.5, 0.5, 0.5),
+                Vec3::new(5.0, 2.0, 0.0),
+                Codim::Filament,
+            ),
+            (
+                Vec3::new(0.01, 0.5, 0.01),
+                Vec3::new(-3.0, 1.0, -4.0),
+                Codim::Point,
+            ),
+        ];
+        let [a, b, c] = start.map(|(x, v, k)| p.push(x, v, 1.0, 0.01, k));
         let info = advect(&mut p, &g, &SolidSet::default(), lo, hi, 0.01);
         assert_eq!(info.wall_clamps, 2);
         assert!(p.x[a][0] < 1.0 && p.x[c][0] > 0.0 && p.x[c][2] > 0.0);
