@@ -176,10 +176,10 @@ impl SolidSet {
 
     /// Moves `x` out of the solids to signed distance at least `margin`
     /// while keeping it in the box `[lo + margin, hi − margin]`: the point
-    /// is clamped to the box, and the
-    /// push along the solid's normal drops the components that point out
-    /// through a wall the point lies on, so a point where a solid meets a
-    /// wall slides along the wall instead of bouncing between the two.
+    /// is clamped to the box, and the push along the solid's normal drops
+    /// the components that point out through a wall the point lies on, so a
+    /// point where a solid meets a wall slides along the wall instead of
+    /// bouncing between the two.
     /// Returns (pushed out of a solid, clamped to the box).
     pub fn push_out_in_box(
         &self,

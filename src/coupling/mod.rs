@@ -255,7 +255,15 @@ pub fn solve(
         dx: grid.dx,
     };
     let sheets = &surf.nb.x[..surf.n_sheet()];
-    let constrained = faces::constraints(grid, &full, sheets);
+    // K after the pre-solve release, with the face masses of eq. (19)
+    // (per face, so releasing more faces later leaves the others' as they are)
+    let mut constrained = faces::constraints(grid, &full, sheets);
+    let released = constrained.release_enclosed(grid, &full, sheets);
+    if prm.face_mass == FaceMass::Sheet {
+        if let Some(s) = volume_spacing(parts, prm.surface.density) {
+            constrained.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
+        }
+    }
     // the velocity jump no substep makes physically (release::outlier_bound)
     let v_ref = grid
         .u
@@ -266,17 +274,9 @@ pub fn solve(
     let bound = release::outlier_bound(v_ref, sc.sigma, sc.density, sc.dx);
     // cells around which the solve found outliers (release::outlier_cells)
     let mut around: Vec<usize> = Vec::new();
-    let (k, vstar, sys, x, kept) = loop {
+    let (k, vstar, sys, x, kept, u) = loop {
         let mut k = constrained.clone();
-        info.released_faces = k.release_enclosed(grid, &full, sheets);
-        if !around.is_empty() {
-            info.released_faces += k.release_around(grid, &full, &around);
-        }
-        if prm.face_mass == FaceMass::Sheet {
-            if let Some(s) = volume_spacing(parts, prm.surface.density) {
-                k.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
-            }
-        }
+        info.released_faces = released + k.release_around(grid, &full, &around);
         info.faces = k.len();
         if k.is_empty() {
             return solve_uncoupled(grid, solids, parts, prm, dt, layers, &surf, info, t);
@@ -340,7 +340,7 @@ pub fn solve(
             .collect();
         let bad = release::outlier_cells(grid, &full, q, &surf.nb.x, &u, bound);
         if bad.is_empty() {
-            break (k, vstar, sys, x, kept);
+            break (k, vstar, sys, x, kept, u);
         }
         let fresh = bad.iter().any(|c| around.binary_search(c).is_err());
         if !fresh || info.outlier_rounds == MAX_OUTLIER_ROUNDS {
@@ -357,9 +357,6 @@ pub fn solve(
     };
     *warm = Some(kept);
     let q = &x[sys.qo..sys.qo + sys.nq];
-    let u: Vec<Vec3> = (0..sys.np)
-        .map(|i| Vec3::new(x[sys.u_row(i, 0)], x[sys.u_row(i, 1)], x[sys.u_row(i, 2)]))
-        .collect();
     // (Gq)_f and the velocity change that takes each constraint face from
     // the pressure update of the ghost-fluid projection to (J u)_f
     let gq: Vec<Real> = (0..k.len())

@@ -24,7 +24,7 @@
 use super::faces::Constraints;
 use crate::grid::extrapolate::is_wall_face;
 use crate::grid::projection::Poisson;
-use crate::grid::MacGrid;
+use crate::grid::{MacGrid, NONE};
 use crate::math::{Real, Vec3};
 
 /// Smallest pinning ‖A z‖² of an enclosed cell's null mode before its
@@ -135,11 +135,7 @@ impl Constraints {
         let ns = old.of_face[0].len();
         *self = Constraints {
             ptr: vec![0],
-            of_face: [
-                vec![NONE_FACE; ns],
-                vec![NONE_FACE; ns],
-                vec![NONE_FACE; ns],
-            ],
+            of_face: [vec![NONE; ns], vec![NONE; ns], vec![NONE; ns]],
             ..Default::default()
         };
         for f in (0..old.len()).filter(|&f| !drop[f]) {
@@ -158,8 +154,6 @@ impl Constraints {
         released
     }
 }
-
-const NONE_FACE: u32 = crate::grid::NONE;
 
 /// The largest velocity jump across a face (m/s) that a substep of length
 /// `dt` can make physically, times [`OUTLIER_FACTOR`]: the largest speed
