@@ -74,6 +74,12 @@ pub struct ReseedParams {
     /// A particle lighter than this fraction of the mean mass of its
     /// same-codimension neighbours is merged into the nearest one; 0 disables it.
     pub light_fraction: Real,
+    /// Mass floor (kg): no particle lighter than this is inserted, and one
+    /// lighter than this is merged into its nearest same-codimension
+    /// neighbour like a light one; 0 disables it. Liquid scenes set it
+    /// ([`ReseedParams::liquid`]); film scenes, whose sheets may be µm thin,
+    /// leave it off.
+    pub min_mass: Real,
 }
 
 impl ReseedParams {
@@ -88,9 +94,30 @@ impl ReseedParams {
             gap_lines: false,
             absorb_distance: 0.3,
             light_fraction: 0.2,
+            min_mass: 0.0,
+        }
+    }
+
+    /// [`ReseedParams::paper`] for a liquid scene of density `rho`, with the
+    /// mass floor at [`LIQUID_MIN_MASS`] × ρ (h/4)³ (the lightest volume
+    /// particle of the paper's samplings, spacing Δx/4 with h = Δx).
+    pub fn liquid(h: Real, rho: Real) -> Self {
+        ReseedParams {
+            min_mass: LIQUID_MIN_MASS * rho * (0.25 * h).powi(3),
+            ..Self::paper(h)
         }
     }
 }
+
+/// Mass floor of reseeding in liquid scenes, relative to the mass of a
+/// volume particle at spacing h/4. In the fluid polygon, filament reseeding
+/// along a stretched rim split its particles again and again, down to
+/// 1e-10 kg (0.03 % of a volume particle's mass); the rim force 2σl on such
+/// a particle accelerates it at ~10⁵ m/s², and the CFL substep fell to
+/// 1e-5 s. With the floor at 0.02 the rim still shot 3e-9 kg particles off at
+/// 13–15 m/s (`docs/decisions.md`). 0.1 × ρ(h/4)³ is a droplet of radius
+/// Δx/14.
+pub const LIQUID_MIN_MASS: Real = 0.1;
 
 /// What one reseeding pass did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -360,6 +387,9 @@ fn insert(parts: &mut Particles, kind: Codim, cands: Vec<Vec3>, prm: &ReseedPara
         cand.sort_by(|a, b| a.partial_cmp(b).unwrap());
         cand.truncate(prm.donors);
         let f = 1.0 / (cand.len() as Real + 1.0);
+        if f * cand.iter().map(|&(_, j)| parts.mass[j]).sum::<Real>() < prm.min_mass {
+            continue;
+        }
         let (mut m, mut mom, mut r) = (0.0, Vec3::zeros(), 0.0);
         for &(_, j) in &cand {
             let dm = f * parts.mass[j];
@@ -436,13 +466,14 @@ fn remove_close(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
 
 /// Merges every non-fixed particle of codimension `kind` whose mass is below
 /// `light_fraction` × the mean mass of its same-kind neighbours within h
-/// into its nearest such neighbour (mass and momentum added). Repeated
+/// (or below `min_mass`) into its nearest such neighbour (mass and momentum
+/// added). Repeated
 /// insertions in a region that keeps stretching split masses geometrically;
 /// a particle 1/10 of its neighbours' mass makes the tension system (rows
 /// scaled by σΔt²S/m) stiff enough to blow up (bursting bubble, s = 4 mm,
 /// step 45: v = 2·10³ m/s on a 2.9·10⁻¹⁰ kg particle among 1.6·10⁻⁸ kg ones).
 fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
-    if prm.light_fraction <= 0.0 {
+    if prm.light_fraction <= 0.0 && prm.min_mass <= 0.0 {
         return 0;
     }
     let idx: Vec<usize> = (0..parts.len())
@@ -470,7 +501,8 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
             }
         });
         let (_, q) = best?;
-        (parts.mass[p] < prm.light_fraction * sum / cnt as Real).then_some(q)
+        let light = parts.mass[p] < prm.light_fraction * sum / cnt as Real;
+        (light || parts.mass[p] < prm.min_mass).then_some(q)
     };
     // The sequential pass below visits the particles in order and merges
     // each light one at once, which changes its neighbours' tests. The tests
@@ -517,13 +549,45 @@ fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
 /// how a retracting rim gathers the film it sweeps (Taylor–Culick): without
 /// it a light rim particle, pulled by the rim tension 2σl, overtakes the
 /// sheet instead of collecting it.
-fn absorb_into_rims(parts: &mut Particles, prm: &ReseedParams) -> u64 {
+///
+/// Only free-film sheet particles are collected: one with a volume particle
+/// within h is the surface layer of a liquid body (Appendix F). Absorbing it
+/// opened a hole in the layer that the volume→sheet rule refilled from the
+/// volume, so a rim lying on a liquid body pumped the body into itself
+/// (the fluid polygon, `docs/decisions.md`).
+fn absorb_into_rims(parts: &mut Particles, prm: &ReseedParams, volume: &[Vec3]) -> u64 {
+    let on_volume = near_volume(parts, volume, prm.h);
     absorb_nearest(
         parts,
         prm.absorb_distance * prm.h,
         |p, i| p.codim[i] == Codim::Filament,
-        |p, i| p.codim[i] == Codim::Sheet && !p.fixed[i],
+        |p, i| p.codim[i] == Codim::Sheet && !p.fixed[i] && !on_volume[i],
     )
+}
+
+/// For every non-volume particle of `parts`: is a volume particle of
+/// `parts`, or a point of `volume`, within `r`?
+fn near_volume(parts: &Particles, volume: &[Vec3], r: Real) -> Vec<bool> {
+    let vol: Vec<Vec3> = (0..parts.len())
+        .filter(|&i| parts.codim[i] == Codim::Volume)
+        .map(|i| parts.x[i])
+        .chain(volume.iter().copied())
+        .collect();
+    if vol.is_empty() {
+        return vec![false; parts.len()];
+    }
+    let grid = CellGrid::build(&vol, r);
+    (0..parts.len())
+        .into_par_iter()
+        .map(|i| {
+            if parts.codim[i] == Codim::Volume {
+                return false;
+            }
+            let mut hit = false;
+            grid.for_each_within(&vol, &parts.x[i], r, |_, _| hit = true);
+            hit
+        })
+        .collect()
 }
 
 /// Merges every particle with `absorbed(i)` into the nearest particle with
@@ -594,7 +658,7 @@ pub fn reseed<'a>(
     shape: &dyn LocalShape,
     prm: &ReseedParams,
 ) -> ReseedCounts {
-    reseed_guarded(parts, frames, nbrs, shape, prm, |_| true)
+    reseed_guarded(parts, frames, nbrs, shape, prm, |_| true, &[])
 }
 
 /// [`reseed`] with a guard on filament insertion: filament particle `p`
@@ -602,7 +666,10 @@ pub fn reseed<'a>(
 /// [`ReseedCounts::filament_skipped`]. The film step passes "the frame was
 /// built from filament neighbours and is line-like" (PCA λ₂ ≤ ratio × λ₁):
 /// on a clump no curve fits, and inserting along a garbage tangent
-/// multiplied clumps on the bursting bubble.
+/// multiplied clumps on the bursting bubble. `volume` holds the positions of
+/// volume particles that are not in `parts` (a liquid scene reseeds its
+/// sheet/filament set on its own): a sheet particle within h of one is a
+/// liquid body's surface layer, which rims do not collect.
 pub fn reseed_guarded<'a>(
     parts: &mut Particles,
     frames: &[Mat3],
@@ -610,6 +677,7 @@ pub fn reseed_guarded<'a>(
     shape: &dyn LocalShape,
     prm: &ReseedParams,
     filament_ok: impl Fn(usize) -> bool + Sync,
+    volume: &[Vec3],
 ) -> ReseedCounts {
     let n0 = parts.len();
     let view: &Particles = parts;
@@ -647,7 +715,7 @@ pub fn reseed_guarded<'a>(
         filament_skipped: skipped,
         ..Default::default()
     };
-    c.absorbed = absorb_into_rims(parts, prm);
+    c.absorbed = absorb_into_rims(parts, prm, volume);
     c.boundary_absorbed = absorb_into_boundary(parts, prm);
     c.light_merged =
         merge_light(parts, Codim::Sheet, prm) + merge_light(parts, Codim::Filament, prm);

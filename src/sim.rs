@@ -96,6 +96,8 @@ pub struct RunOptions {
     /// Resolution scale: Δx × scale, particle spacings follow (relative to
     /// Δx). `None`: 1 for a new run, the cache's scale when resuming.
     pub scale: Option<Real>,
+    /// Print every substep to stderr.
+    pub verbose: bool,
 }
 
 /// A run in progress.
@@ -122,6 +124,8 @@ pub struct Sim {
     pub dropped_in_solid: usize,
     /// The scene's jets (their emission state is a function of time).
     pub jets: Vec<Jet>,
+    /// Print every substep to stderr ([`RunOptions::verbose`]).
+    pub verbose: bool,
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SimError + '_ {
@@ -322,6 +326,7 @@ impl Sim {
                 totals: StageTimes::default(),
                 dropped_in_solid: 0,
                 jets,
+                verbose: opt.verbose,
             });
         }
         let film_only = !scene.has_liquid();
@@ -382,6 +387,7 @@ impl Sim {
             totals: StageTimes::default(),
             dropped_in_solid: rep.dropped_in_solid,
             jets,
+            verbose: opt.verbose,
         })
     }
 
@@ -513,6 +519,30 @@ impl Sim {
                 continue;
             }
             let s = &info.pressure.solve;
+            if self.verbose {
+                let p = &self.state.particles;
+                let fast = (0..p.len()).max_by(|&a, &b| p.v[a].norm().total_cmp(&p.v[b].norm()));
+                let fastest = fast.map_or(String::new(), |i| {
+                    format!(
+                        "; fastest: {:?} id {} at {:.2} m/s, ({:.4}, {:.4}, {:.4}) m, {:.2e} kg",
+                        p.codim[i],
+                        p.id[i],
+                        p.v[i].norm(),
+                        p.x[i].x,
+                        p.x[i].y,
+                        p.x[i].z,
+                        p.mass[i]
+                    )
+                });
+                eprintln!(
+                    "frame {f} substep {substeps}: t = {:.6} s, Δt = {dt:.3e} s, {} iterations, residual {:.1e}, {} particles, {:.1} s into the frame{fastest}",
+                    self.time,
+                    s.iterations,
+                    s.rel_residual,
+                    p.len(),
+                    wall.elapsed().as_secs_f64()
+                );
+            }
             rec.pressure.add(s.iterations, s.rel_residual, s.converged);
             rec.substep_log.push(SubstepRecord {
                 dt,

@@ -25,10 +25,25 @@
 //!   nearer than `thin_distance` (the volume has become thin).
 //! - 1→0: cones along b³ with θ = π/4 both hold volume particles.
 //! - 1→2: cones along b² with θ = π/6: exactly one cone holds sheet or
-//!   filament particles (the particle is on a sheet's edge).
+//!   filament particles (the particle is on a sheet's edge), and no volume
+//!   particle lies within h. The last condition is not in the paper: a sheet
+//!   particle with a volume neighbour is the surface layer of a liquid body
+//!   (Appendix F), whose end at a nozzle, a wall or a thick rim is not a
+//!   thin sheet's rim (without it the upstream edge of every jet's surface
+//!   layer turned into filaments).
 //! - 2→3: no filament particle within h.
+//! - 2→0 (not in the paper): a filament particle whose π/4 cones along ±b²
+//!   and ±b³ all hold volume particles lies inside a liquid body, like the
+//!   engulfed sheet particle of 1→0. Without it, rims that a liquid body
+//!   flowed over stayed inside it and filament reseeding multiplied them
+//!   (the fluid polygon's pancake held ~1,300 filament particles with a
+//!   median of 44 volume neighbours each, `docs/decisions.md`).
+//! - 2→1 (not in the paper): otherwise a filament particle with a volume
+//!   particle within h has come to lie on a liquid body's surface, and joins
+//!   its surface layer: the converse of the free-sheets-only 1→2 rule.
 //!
-//! The paper implements no 2→1; neither does this module.
+//! The paper implements no 2→1; this module does so only in liquid scenes,
+//! for filaments on a body's surface.
 
 use crate::math::{Mat3, Real, Vec3};
 use crate::particles::Codim;
@@ -147,6 +162,12 @@ pub struct TransitionCounts {
     pub sheet_to_filament: u64,
     /// Filament → point.
     pub filament_to_point: u64,
+    /// Filament → volume (engulfed by a liquid body).
+    #[serde(default)]
+    pub filament_to_volume: u64,
+    /// Filament → sheet (lying on a liquid body's surface).
+    #[serde(default)]
+    pub filament_to_sheet: u64,
 }
 
 impl TransitionCounts {
@@ -160,6 +181,8 @@ impl TransitionCounts {
                 (Codim::Sheet, Codim::Volume) => n.sheet_to_volume += 1,
                 (Codim::Sheet, Codim::Filament) => n.sheet_to_filament += 1,
                 (Codim::Filament, Codim::Point) => n.filament_to_point += 1,
+                (Codim::Filament, Codim::Volume) => n.filament_to_volume += 1,
+                (Codim::Filament, Codim::Sheet) => n.filament_to_sheet += 1,
                 _ => {}
             }
             *c = nc;
@@ -173,6 +196,8 @@ impl TransitionCounts {
         self.sheet_to_volume += o.sheet_to_volume;
         self.sheet_to_filament += o.sheet_to_filament;
         self.filament_to_point += o.filament_to_point;
+        self.filament_to_volume += o.filament_to_volume;
+        self.filament_to_sheet += o.filament_to_sheet;
     }
 
     /// Total number of events.
@@ -181,6 +206,8 @@ impl TransitionCounts {
             + self.sheet_to_volume
             + self.sheet_to_filament
             + self.filament_to_point
+            + self.filament_to_volume
+            + self.filament_to_sheet
     }
 }
 
@@ -193,6 +220,31 @@ fn min_cross_distance(x: &[Vec3], a: &[u32], b: &[u32]) -> Real {
         }
     }
     best
+}
+
+/// True when a volume particle lies within `h` of particle `p`.
+fn has_volume_within(p: usize, x: &[Vec3], codim: &[Codim], nbrs: &[u32], h: Real) -> bool {
+    nbrs.iter().any(|&q| {
+        let q = q as usize;
+        q != p && codim[q] == Codim::Volume && (x[q] - x[p]).norm() < h
+    })
+}
+
+/// True when the π/4 cones (`sheet_to_volume_angle`) along ± every axis of
+/// `axes` all hold volume particles: the particle lies inside a liquid body.
+fn engulfed(
+    p: usize,
+    axes: &[Vec3],
+    x: &[Vec3],
+    codim: &[Codim],
+    nbrs: &[u32],
+    prm: &TransitionParams,
+) -> bool {
+    axes.iter().all(|a| {
+        let c = cone_census(p, a, prm.sheet_to_volume_angle, prm.h, x, codim, nbrs);
+        let (vp, vm) = c.count(&[Codim::Volume]);
+        vp > 0 && vm > 0
+    })
 }
 
 /// The codimension particle `p` should have, given the current state.
@@ -233,6 +285,10 @@ pub fn new_codim(
                     return Codim::Volume;
                 }
             }
+            if prm.volume_rules && has_volume_within(p, x, codim, nbrs, prm.h) {
+                // the surface layer of a liquid body: its edge is the body, not a rim
+                return Codim::Sheet;
+            }
             let c = cone_census(p, &b2, prm.sheet_to_filament_angle, prm.h, x, codim, nbrs);
             if c.one_sided(&[Codim::Sheet, Codim::Filament]) {
                 Codim::Filament
@@ -241,6 +297,14 @@ pub fn new_codim(
             }
         }
         Codim::Filament => {
+            if prm.volume_rules {
+                if engulfed(p, &[b2, b3], x, codim, nbrs, prm) {
+                    return Codim::Volume;
+                }
+                if has_volume_within(p, x, codim, nbrs, prm.h) {
+                    return Codim::Sheet;
+                }
+            }
             let has_filament = nbrs.iter().any(|&q| {
                 let q = q as usize;
                 q != p && codim[q] == Codim::Filament && (x[q] - x[p]).norm() < prm.h
@@ -448,6 +512,116 @@ mod tests {
             new_codim(0, &f, &x, &codim, &fixed, nl.of(0), &prm),
             Codim::Volume
         );
+    }
+
+    #[test]
+    fn a_sheet_edge_on_a_volume_body_is_not_a_rim() {
+        // the flat sheet of the edge test, plus a volume particle 0.5 h under
+        // the mid-point of one edge: that edge particle stays a sheet, the
+        // other mid-edge particles still turn
+        let h = 0.3;
+        let n = 11;
+        let mut x = sheet(n, h / 3.0);
+        let centre = x[(n / 2) * n + n / 2];
+        let mut frames: Vec<Mat3> = x.iter().map(|p| edge_frame(p, &centre)).collect();
+        let edge = n / 2; // (i, j) = (0, n/2)
+        let below = x[edge] - Vec3::new(0.0, 0.0, 0.5 * h);
+        x.push(below);
+        frames.push(Mat3::identity());
+        let mut codim = vec![Codim::Sheet; n * n];
+        codim.push(Codim::Volume);
+        let fixed = vec![false; x.len()];
+        let nl = neighbor_lists(&x, h);
+        let prm = TransitionParams::paper(h);
+        let at = |k: usize| new_codim(k, &frames[k], &x, &codim, &fixed, nl.of(k), &prm);
+        assert_eq!(at(edge), Codim::Sheet);
+        assert_eq!(at((n - 1) * n + n / 2), Codim::Filament);
+        assert_eq!(at((n / 2) * n), Codim::Filament);
+        // a film-only scene has no volume rules, and the edge turns as before
+        let film = TransitionParams {
+            volume_rules: false,
+            ..prm.clone()
+        };
+        let k = edge;
+        assert_eq!(
+            new_codim(k, &frames[k], &x, &codim, &fixed, nl.of(k), &film),
+            Codim::Filament
+        );
+    }
+
+    #[test]
+    fn a_filament_inside_a_volume_body_returns_to_volume_one_on_its_surface_to_sheet() {
+        let h = 0.3;
+        let s = h / 3.0;
+        // a line of filament particles along x through a 7×5×5 volume block
+        let mut x = Vec::new();
+        let mut codim = Vec::new();
+        for i in -3..=3 {
+            for j in -2..=2 {
+                for k in -2..=2 {
+                    x.push(Vec3::new(i as Real * s, j as Real * s, k as Real * s));
+                    codim.push(if j == 0 && k == 0 {
+                        Codim::Filament
+                    } else {
+                        Codim::Volume
+                    });
+                }
+            }
+        }
+        let frames = vec![Mat3::identity(); x.len()];
+        let fixed = vec![false; x.len()];
+        let nl = neighbor_lists(&x, h);
+        let mut c = codim.clone();
+        let n = update_codims(
+            &x,
+            &mut c,
+            &fixed,
+            &frames,
+            |i| nl.of(i),
+            &TransitionParams::paper(h),
+        );
+        let centre = x.iter().position(|p| p.norm() == 0.0).unwrap();
+        assert_eq!(c[centre], Codim::Volume);
+        assert!(n.filament_to_volume >= 1);
+        // the same line lying on the block's top face (volume below only)
+        // joins the surface layer; 1.2 h above it, it stays a filament
+        for (z, kind, count) in [
+            (3.0 * s, Codim::Sheet, 7),
+            (2.0 * s + 1.2 * h, Codim::Filament, 0),
+        ] {
+            for p in x.iter_mut().zip(&codim) {
+                if *p.1 == Codim::Filament {
+                    p.0.z = z;
+                }
+            }
+            let nl = neighbor_lists(&x, h);
+            let mut c = codim.clone();
+            let n = update_codims(
+                &x,
+                &mut c,
+                &fixed,
+                &frames,
+                |i| nl.of(i),
+                &TransitionParams::paper(h),
+            );
+            assert_eq!(n.filament_to_volume, 0);
+            assert_eq!(n.filament_to_sheet, count);
+            assert_eq!(c[centre], kind);
+        }
+        // and a film-only scene never applies the rule, even to the buried line
+        let film = TransitionParams {
+            volume_rules: false,
+            ..TransitionParams::paper(h)
+        };
+        for p in x.iter_mut().zip(&codim) {
+            if *p.1 == Codim::Filament {
+                p.0.z = 0.0;
+            }
+        }
+        let nl = neighbor_lists(&x, h);
+        let mut c = codim.clone();
+        let n = update_codims(&x, &mut c, &fixed, &frames, |i| nl.of(i), &film);
+        assert_eq!(n.filament_to_volume, 0);
     }
 
     #[test]

@@ -154,6 +154,7 @@ fn dripping_jet_leaves_the_nozzle_at_the_jet_speed() {
         out_root: Some(dir.path().to_path_buf()),
         frames: Some(10),
         scale: Some(2.0),
+        verbose: false,
         ..Default::default()
     };
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/dripping.yaml");
@@ -241,6 +242,7 @@ fn collision_momentum(
         frames: Some(frames),
         resume: false,
         scale: Some(scale),
+        verbose: false,
     };
     let mut sim = Sim::open_text(&edit(&text), scene, &opt).unwrap();
     // the left cube: particles left of the mid-plane at the start, by id
@@ -325,6 +327,7 @@ fn a_failing_coupled_solve_halves_the_substep_then_stops_cleanly() {
         frames: Some(1),
         resume: false,
         scale: Some(2.0),
+        verbose: false,
     };
     let mut sim = Sim::open_text(&text, scene, &opt).unwrap();
     let err = sim

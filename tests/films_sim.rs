@@ -34,6 +34,7 @@ fn open(scene: &Path, out: &Path, frames: u32, resume: bool) -> Sim {
             frames: Some(frames),
             resume,
             scale: None,
+            verbose: false,
         },
     )
     .unwrap()

@@ -63,6 +63,7 @@ fn open(dir: &Path, yaml: &str) -> Sim {
             frames: None,
             resume: false,
             scale: None,
+            verbose: false,
         },
     )
     .unwrap()

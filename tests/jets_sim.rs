@@ -40,6 +40,7 @@ fn run(scene: &Path, out: &Path, frames: u32, resume: bool, scale: Option<f64>) 
         frames: Some(frames),
         resume,
         scale,
+        verbose: false,
     };
     let mut sim = Sim::open(scene, &opt).unwrap_or_else(|e| panic!("{e}"));
     sim.run(&AtomicBool::new(false), |_, _| {})
@@ -144,6 +145,7 @@ fn scale_coarsens_the_run_and_is_kept_on_resume() {
         frames: Some(3),
         resume: true,
         scale: Some(1.0),
+        verbose: false,
     };
     let e = Sim::open(&scene, &opt).err().expect("must refuse");
     assert!(e.to_string().contains("--scale 2"), "{e}");

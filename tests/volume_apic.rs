@@ -86,6 +86,7 @@ fn apic_runs_resume_bit_for_bit() {
             frames: Some(frames),
             resume,
             scale: None,
+            verbose: false,
         };
         let mut sim = Sim::open(&scene, &opt).unwrap();
         sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();

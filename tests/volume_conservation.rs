@@ -32,6 +32,7 @@ fn mass_is_conserved_and_no_particle_enters_a_solid_with_large_frame_steps() {
         frames: None,
         resume: false,
         scale: None,
+        verbose: false,
     };
     let mut sim = Sim::open(&scene, &opt).unwrap();
     let p0 = sim.state.particles.clone();

@@ -31,6 +31,7 @@ fn a_free_droplet_falls_ballistically() {
         frames: None,
         resume: false,
         scale: None,
+        verbose: false,
     };
     let mut sim = Sim::open(&scene, &opt).unwrap();
     let com = |p: &codimfx::Particles| -> Vec3 {

@@ -51,6 +51,7 @@ fn check_rest(text: &str, count: usize) {
         frames: None,
         resume: false,
         scale: None,
+        verbose: false,
     };
     let mut sim = Sim::open(&scene, &opt).unwrap();
     let n0 = sim.state.particles.len();

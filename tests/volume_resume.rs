@@ -35,6 +35,7 @@ fn run(scene: &Path, out: &Path, frames: u32, resume: bool) {
         frames: Some(frames),
         resume,
         scale: None,
+        verbose: false,
     };
     let mut sim = Sim::open(scene, &opt).unwrap();
     sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();
@@ -101,6 +102,7 @@ fn resume_refuses_a_changed_scene() {
         frames: Some(2),
         resume: true,
         scale: None,
+        verbose: false,
     };
     let e = Sim::open(&scene, &opt).err().expect("must refuse");
     assert!(e.to_string().contains("scene file changed"), "{e}");

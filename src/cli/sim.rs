@@ -1,4 +1,4 @@
-//! `codimfx sim [SCENE.yaml] [-o DIR] [--frames N] [--resume] [--threads N] [--scale S]`:
+//! `codimfx sim [SCENE.yaml] [-o DIR] [--frames N] [--resume] [--threads N] [--scale S] [-v]`:
 //! runs a scene, writing `DIR/<scene-name>/particles.NNNN.ply` and
 //! `manifest.json`, with a progress bar and a per-stage time summary.
 //! Without a scene it runs the dripping-water preset built into the binary.
@@ -34,6 +34,10 @@ pub struct SimArgs {
     /// has ~8× fewer particles. Recorded in the manifest; --resume reuses it.
     #[arg(long, value_parser = positive_scale)]
     scale: Option<f64>,
+    /// Print every substep (time, Δt, solver iterations and residual, wall
+    /// time) to stderr: for following a slow frame.
+    #[arg(short = 'v', long)]
+    verbose: bool,
 }
 
 /// The dripping-water preset, built into the binary for `codimfx sim` without a scene.
@@ -74,6 +78,7 @@ pub fn run(a: SimArgs) -> Result<()> {
         frames: a.frames,
         resume: a.resume,
         scale: a.scale,
+        verbose: a.verbose,
     };
     let (mut sim, label) = match &a.scene {
         Some(p) => (Sim::open(p, &opt)?, p.display().to_string()),

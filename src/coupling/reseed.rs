@@ -79,7 +79,19 @@ pub fn reseed_surface(
         let [l1, l2, _] = frames[i].eigenvalues;
         i >= n_sheet && l1 > 0.0 && l2 <= LINE_RATIO * l1
     };
-    let counts = reseed_guarded(&mut film, &axes, |i| nb.lists.of(i), &shape, prm, line_like);
+    let volume: Vec<Vec3> = (0..parts.len())
+        .filter(|&i| parts.codim[i] == Codim::Volume)
+        .map(|i| parts.x[i])
+        .collect();
+    let counts = reseed_guarded(
+        &mut film,
+        &axes,
+        |i| nb.lists.of(i),
+        &shape,
+        prm,
+        line_like,
+        &volume,
+    );
     if counts.inserted() + counts.removed() == 0 {
         return Ok(counts);
     }

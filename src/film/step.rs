@@ -312,8 +312,15 @@ pub fn step(
                 let [l1, l2, _] = frames[i].eigenvalues;
                 i >= nb_joint && l1 > 0.0 && l2 <= prm.clump_ratio * l1
             };
-            info.reseed =
-                reseed_guarded(&mut film, &axes, |i| nb.lists.of(i), &shape, rp, line_like);
+            info.reseed = reseed_guarded(
+                &mut film,
+                &axes,
+                |i| nb.lists.of(i),
+                &shape,
+                rp,
+                line_like,
+                &[],
+            );
         }
         info.timings.reseed = t.elapsed().as_secs_f64();
         let unchanged =
