@@ -542,6 +542,13 @@ impl Sim {
                     p.len(),
                     wall.elapsed().as_secs_f64()
                 );
+                if let Some(e) = info
+                    .coupling
+                    .as_ref()
+                    .and_then(|c| c.first_failure.as_ref())
+                {
+                    eprintln!("  the other form took over after: {e}");
+                }
             }
             rec.pressure.add(s.iterations, s.rel_residual, s.converged);
             rec.substep_log.push(SubstepRecord {
