@@ -90,22 +90,28 @@ fn close_pairs_are_merged_conserving_mass_and_momentum() {
     assert!((momentum(&p) - j0).norm() < 1e-12 * j0.norm());
 }
 
-#[test]
-fn stretched_filament_gains_a_particle_in_each_gap() {
-    let h = 0.1;
+/// Ten filament particles of mass 1 along x, spacing 0.4h except one gap of
+/// 0.8h between particles 4 and 5.
+fn stretched_line(h: Real) -> Particles {
     let mut p = Particles::new();
-    // spacing 0.4h except one gap of 0.8h between particles 4 and 5
     let mut xs: Vec<Real> = (0..5).map(|i| i as Real * 0.4 * h).collect();
     xs.extend((5..10).map(|i| (i as Real + 1.0) * 0.4 * h));
     for x in xs {
         p.push(
             Vec3::new(x, 0.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::y(),
             1.0,
             0.01,
             Codim::Filament,
         );
     }
+    p
+}
+
+#[test]
+fn stretched_filament_gains_a_particle_in_each_gap() {
+    let h = 0.1;
+    let mut p = stretched_line(h);
     let m0 = p.total_mass();
     let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
     assert_eq!(c.filament_inserted, 1, "{c:?}");
@@ -274,23 +280,9 @@ fn a_rim_collects_free_sheet_particles_but_not_a_liquid_bodys_surface_layer() {
 #[test]
 fn the_mass_floor_stops_insertion_and_merges_what_is_below_it() {
     let h = 0.1;
-    // the stretched filament of `stretched_filament_gains_a_particle_in_each_gap`
-    // (masses 1): the new particle takes 1/5 of each of its four donors, 0.8
-    let line = || {
-        let mut p = Particles::new();
-        let mut xs: Vec<Real> = (0..5).map(|i| i as Real * 0.4 * h).collect();
-        xs.extend((5..10).map(|i| (i as Real + 1.0) * 0.4 * h));
-        for x in xs {
-            p.push(
-                Vec3::new(x, 0.0, 0.0),
-                Vec3::y(),
-                1.0,
-                0.01,
-                Codim::Filament,
-            );
-        }
-        p
-    };
+    // the stretched line: the new particle takes 1/5 of each of its four
+    // donors, 0.8
+    let line = || stretched_line(h);
     let floor = |m: Real| ReseedParams {
         min_mass: m,
         ..ReseedParams::paper(h)

@@ -354,6 +354,41 @@ mod tests {
         v
     }
 
+    /// [`update_codims`] on a copy of `codim` with no fixed particles and
+    /// neighbour lists within `prm.h`.
+    fn update_all(
+        x: &[Vec3],
+        codim: &[Codim],
+        frames: &[Mat3],
+        prm: &TransitionParams,
+    ) -> (Vec<Codim>, TransitionCounts) {
+        let nl = neighbor_lists(x, prm.h);
+        let mut c = codim.to_vec();
+        let n = update_codims(x, &mut c, &vec![false; x.len()], frames, |i| nl.of(i), prm);
+        (c, n)
+    }
+
+    /// A (2n+1)³ lattice block of spacing s centred at the origin: volume
+    /// particles, except `kind` where `inner(i, j, k)`.
+    fn block(
+        n: i32,
+        s: Real,
+        inner: impl Fn(i32, i32, i32) -> bool,
+        kind: Codim,
+    ) -> (Vec<Vec3>, Vec<Codim>) {
+        let mut x = Vec::new();
+        let mut codim = Vec::new();
+        for i in -n..=n {
+            for j in -n..=n {
+                for k in -n..=n {
+                    x.push(Vec3::new(i as Real, j as Real, k as Real) * s);
+                    codim.push(if inner(i, j, k) { kind } else { Codim::Volume });
+                }
+            }
+        }
+        (x, codim)
+    }
+
     /// In-plane frame for a particle of the flat sheet whose b² points away
     /// from the sheet's centre (what PCA gives at an edge), b³ = z.
     fn edge_frame(x: &Vec3, centre: &Vec3) -> Mat3 {
@@ -376,18 +411,8 @@ mod tests {
         let x = sheet(n, h / 3.0);
         let centre = x[(n / 2) * n + n / 2];
         let codim = vec![Codim::Sheet; x.len()];
-        let fixed = vec![false; x.len()];
         let frames: Vec<Mat3> = x.iter().map(|p| edge_frame(p, &centre)).collect();
-        let nl = neighbor_lists(&x, h);
-        let mut c = codim.clone();
-        let counts = update_codims(
-            &x,
-            &mut c,
-            &fixed,
-            &frames,
-            |i| nl.of(i),
-            &TransitionParams::paper(h),
-        );
+        let (c, counts) = update_all(&x, &codim, &frames, &TransitionParams::paper(h));
         for i in 0..n {
             for j in 0..n {
                 let on_edge = i == 0 || j == 0 || i == n - 1 || j == n - 1;
@@ -422,18 +447,8 @@ mod tests {
             }
         }
         let codim = vec![Codim::Volume; x.len()];
-        let fixed = vec![false; x.len()];
         let frames = vec![Mat3::identity(); x.len()];
-        let nl = neighbor_lists(&x, h);
-        let mut c = codim.clone();
-        let n = update_codims(
-            &x,
-            &mut c,
-            &fixed,
-            &frames,
-            |i| nl.of(i),
-            &TransitionParams::paper(h),
-        );
+        let (c, n) = update_all(&x, &codim, &frames, &TransitionParams::paper(h));
         for (idx, p) in x.iter().enumerate() {
             let k = (p.z / s).round() as i32;
             let expect = if k == 0 || k == 5 {
@@ -451,20 +466,7 @@ mod tests {
         let h = 0.3;
         let s = h / 3.0;
         // a sheet particle at the centre of a volume block → 1→0
-        let mut x = Vec::new();
-        let mut codim = Vec::new();
-        for i in -2..=2 {
-            for j in -2..=2 {
-                for k in -2..=2 {
-                    x.push(Vec3::new(i as Real * s, j as Real * s, k as Real * s));
-                    codim.push(if (i, j, k) == (0, 0, 0) {
-                        Codim::Sheet
-                    } else {
-                        Codim::Volume
-                    });
-                }
-            }
-        }
+        let (x, codim) = block(2, s, |i, j, k| (i, j, k) == (0, 0, 0), Codim::Sheet);
         let centre = codim.iter().position(|c| *c == Codim::Sheet).unwrap();
         let frames = vec![Mat3::identity(); x.len()];
         let fixed = vec![false; x.len()];
@@ -553,40 +555,18 @@ mod tests {
     fn a_filament_inside_a_volume_body_returns_to_volume_one_on_its_surface_to_sheet() {
         let h = 0.3;
         let s = h / 3.0;
-        // a line of filament particles along x through a 7×5×5 volume block
-        let mut x = Vec::new();
-        let mut codim = Vec::new();
-        for i in -3..=3 {
-            for j in -2..=2 {
-                for k in -2..=2 {
-                    x.push(Vec3::new(i as Real * s, j as Real * s, k as Real * s));
-                    codim.push(if j == 0 && k == 0 {
-                        Codim::Filament
-                    } else {
-                        Codim::Volume
-                    });
-                }
-            }
-        }
+        // a line of filament particles along x through a 5×5×5 volume block
+        let (mut x, codim) = block(2, s, |_, j, k| j == 0 && k == 0, Codim::Filament);
         let frames = vec![Mat3::identity(); x.len()];
         let fixed = vec![false; x.len()];
-        let nl = neighbor_lists(&x, h);
-        let mut c = codim.clone();
-        let n = update_codims(
-            &x,
-            &mut c,
-            &fixed,
-            &frames,
-            |i| nl.of(i),
-            &TransitionParams::paper(h),
-        );
+        let (c, n) = update_all(&x, &codim, &frames, &TransitionParams::paper(h));
         let centre = x.iter().position(|p| p.norm() == 0.0).unwrap();
         assert_eq!(c[centre], Codim::Volume);
         assert!(n.filament_to_volume >= 1);
         // the same line lying on the block's top face (volume below only)
         // joins the surface layer; 1.2 h above it, it stays a filament
         for (z, kind, count) in [
-            (3.0 * s, Codim::Sheet, 7),
+            (3.0 * s, Codim::Sheet, 5),
             (2.0 * s + 1.2 * h, Codim::Filament, 0),
         ] {
             for p in x.iter_mut().zip(&codim) {
@@ -594,16 +574,7 @@ mod tests {
                     p.0.z = z;
                 }
             }
-            let nl = neighbor_lists(&x, h);
-            let mut c = codim.clone();
-            let n = update_codims(
-                &x,
-                &mut c,
-                &fixed,
-                &frames,
-                |i| nl.of(i),
-                &TransitionParams::paper(h),
-            );
+            let (c, n) = update_all(&x, &codim, &frames, &TransitionParams::paper(h));
             assert_eq!(n.filament_to_volume, 0);
             assert_eq!(n.filament_to_sheet, count);
             assert_eq!(c[centre], kind);
