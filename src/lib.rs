@@ -13,6 +13,7 @@ pub mod linsolve;
 pub mod math;
 pub mod mls;
 pub mod neighbors;
+pub mod outline;
 pub mod particles;
 pub mod reseed;
 pub mod tension;

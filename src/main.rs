@@ -25,6 +25,8 @@ enum Command {
     Preview(cli::preview::PreviewArgs),
     /// Turn a particle cache into OpenVDB level sets and PLY meshes (surface.####.vdb, mesh.####.ply, …).
     Surface(cli::surface::SurfaceArgs),
+    /// Measure a sheet's outline seen from above in a particle cache: mean radius and Fourier modes in the yaw angle (a fluid polygon's corners).
+    Outline(cli::outline::OutlineArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -35,5 +37,6 @@ fn main() -> anyhow::Result<()> {
         Command::Sim(a) => cli::sim::run(a),
         Command::Preview(a) => cli::preview::run(a),
         Command::Surface(a) => cli::surface::run(a),
+        Command::Outline(a) => cli::outline::run(a),
     }
 }

@@ -1,5 +1,6 @@
 //! One file per subcommand: each defines its clap `…Args` and a `run`.
 pub mod bench;
+pub mod outline;
 pub mod preview;
 pub mod sim;
 pub mod surface;

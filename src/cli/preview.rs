@@ -60,7 +60,7 @@ fn frames_on_disk(dir: &Path) -> Result<Vec<u32>> {
     Ok(v)
 }
 
-fn parse_range(s: &str) -> Result<(u32, u32)> {
+pub(crate) fn parse_range(s: &str) -> Result<(u32, u32)> {
     let r = match s.split_once('-') {
         Some((a, b)) => (a.trim().parse()?, b.trim().parse()?),
         None => {
