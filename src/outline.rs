@@ -36,17 +36,19 @@ impl OutlineModes {
 
 /// Measures the outline of the sheet and filament particles of `parts` in
 /// `bins` yaw bins about the vertical through `centre`, with modes up to
-/// `kmax`. `None` when there are no sheet or filament particles.
+/// `kmax` (at most (bins − 1)/2, which the bins resolve). `None` when there
+/// are no sheet or filament particles, or no bins.
 pub fn outline_modes(
     parts: &Particles,
     centre: &Vec3,
     bins: usize,
     kmax: usize,
 ) -> Option<OutlineModes> {
-    assert!(
-        bins >= 2 * kmax + 1,
-        "{bins} bins cannot resolve mode {kmax}"
-    );
+    if bins == 0 {
+        return None;
+    }
+    // N bins resolve modes up to (N − 1)/2
+    let kmax = kmax.min((bins - 1) / 2);
     let mut r = vec![Real::NAN; bins];
     let mut n = 0;
     for i in 0..parts.len() {
@@ -184,5 +186,8 @@ mod tests {
             cos6.amplitude[6]
         );
         assert!(outline_modes(&Particles::new(), &c, 72, 12).is_none());
+        assert!(outline_modes(&sheet(hex, big, s), &c, 0, 12).is_none());
+        let few = outline_modes(&sheet(hex, big, s), &c, 9, 12).unwrap();
+        assert_eq!(few.amplitude.len(), 5);
     }
 }
