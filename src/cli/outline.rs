@@ -6,7 +6,7 @@ use anyhow::{ensure, Context, Result};
 use clap::Args;
 use codimfx::io::manifest::Manifest;
 use codimfx::io::ply;
-use codimfx::math::{Real, Vec3};
+use codimfx::math::Vec3;
 use codimfx::outline::outline_modes;
 use std::path::PathBuf;
 
@@ -42,15 +42,8 @@ pub fn run(a: OutlineArgs) -> Result<()> {
         .with_context(|| format!("reading the cache {}", a.dir.display()))?;
     let centre = match &a.centre {
         Some(s) => {
-            let v: Vec<Real> = s
-                .split(',')
-                .map(|t| t.trim().parse::<Real>())
-                .collect::<std::result::Result<_, _>>()
-                .with_context(|| format!("--centre {s:?}: expected x,y,z"))?;
-            ensure!(
-                v.len() == 3 && v.iter().all(|c| c.is_finite()),
-                "--centre {s:?}: expected three finite numbers"
-            );
+            let v = crate::cli::preview::parse_reals(s, "--centre")?;
+            ensure!(v.len() == 3, "--centre {s:?}: expected x,y,z");
             Vec3::new(v[0], v[1], v[2])
         }
         None => (Vec3::from(m.domain_min) + Vec3::from(m.domain_max)) * 0.5,

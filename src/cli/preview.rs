@@ -72,19 +72,25 @@ pub(crate) fn parse_range(s: &str) -> Result<(u32, u32)> {
     Ok(r)
 }
 
-fn parse_camera(s: &str, ortho: bool) -> Result<Camera> {
+/// Parses the comma-separated finite numbers of option `flag`.
+pub(crate) fn parse_reals(s: &str, flag: &str) -> Result<Vec<Real>> {
     let v: Vec<Real> = s
         .split(',')
         .map(|t| t.trim().parse::<Real>())
         .collect::<std::result::Result<_, _>>()
-        .with_context(|| format!("--camera {s:?}: expected numbers"))?;
+        .with_context(|| format!("{flag} {s:?}: expected numbers"))?;
+    ensure!(
+        v.iter().all(|c| c.is_finite()),
+        "{flag} {s:?}: non-finite value"
+    );
+    Ok(v)
+}
+
+fn parse_camera(s: &str, ortho: bool) -> Result<Camera> {
+    let v = parse_reals(s, "--camera")?;
     ensure!(
         v.len() == 6 || v.len() == 7,
         "--camera {s:?}: expected ex,ey,ez,tx,ty,tz[,fov]"
-    );
-    ensure!(
-        v.iter().all(|c| c.is_finite()),
-        "--camera {s:?}: non-finite value"
     );
     let cam = Camera {
         eye: Vec3::new(v[0], v[1], v[2]),
