@@ -96,7 +96,7 @@ pub struct RunOptions {
     /// Resolution scale: Δx × scale, particle spacings follow (relative to
     /// Δx). `None`: 1 for a new run, the cache's scale when resuming.
     pub scale: Option<Real>,
-    /// Print every substep to stderr.
+    /// Print every substep of a liquid scene to stderr.
     pub verbose: bool,
 }
 
@@ -126,6 +126,49 @@ pub struct Sim {
     pub jets: Vec<Jet>,
     /// Print every substep to stderr ([`RunOptions::verbose`]).
     pub verbose: bool,
+}
+
+/// One line per substep on stderr (`codimfx sim -v`): time, Δt, coupled or
+/// pressure solve, particle count, wall time into the frame and the fastest
+/// particle; and why the first form of eq. (24) gave up, when it did.
+fn report_substep(
+    frame: u32,
+    substep: u32,
+    t: Real,
+    dt: Real,
+    info: &crate::step::SubstepInfo,
+    p: &Particles,
+    wall: &Instant,
+) {
+    let s = &info.pressure.solve;
+    let fast = (0..p.len()).max_by(|&a, &b| p.v[a].norm().total_cmp(&p.v[b].norm()));
+    let fastest = fast.map_or(String::new(), |i| {
+        let x = p.x[i];
+        format!(
+            "; fastest: {:?} id {} at {:.2} m/s, ({:.4}, {:.4}, {:.4}) m, {:.2e} kg",
+            p.codim[i],
+            p.id[i],
+            p.v[i].norm(),
+            x.x,
+            x.y,
+            x.z,
+            p.mass[i]
+        )
+    });
+    eprintln!(
+        "frame {frame} substep {substep}: t = {t:.6} s, Δt = {dt:.3e} s, {} iterations, residual {:.1e}, {} particles, {:.1} s into the frame{fastest}",
+        s.iterations,
+        s.rel_residual,
+        p.len(),
+        wall.elapsed().as_secs_f64()
+    );
+    if let Some(e) = info
+        .coupling
+        .as_ref()
+        .and_then(|c| c.first_failure.as_ref())
+    {
+        eprintln!("  the other form took over after: {e}");
+    }
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SimError + '_ {
@@ -520,35 +563,15 @@ impl Sim {
             }
             let s = &info.pressure.solve;
             if self.verbose {
-                let p = &self.state.particles;
-                let fast = (0..p.len()).max_by(|&a, &b| p.v[a].norm().total_cmp(&p.v[b].norm()));
-                let fastest = fast.map_or(String::new(), |i| {
-                    format!(
-                        "; fastest: {:?} id {} at {:.2} m/s, ({:.4}, {:.4}, {:.4}) m, {:.2e} kg",
-                        p.codim[i],
-                        p.id[i],
-                        p.v[i].norm(),
-                        p.x[i].x,
-                        p.x[i].y,
-                        p.x[i].z,
-                        p.mass[i]
-                    )
-                });
-                eprintln!(
-                    "frame {f} substep {substeps}: t = {:.6} s, Δt = {dt:.3e} s, {} iterations, residual {:.1e}, {} particles, {:.1} s into the frame{fastest}",
+                report_substep(
+                    f,
+                    substeps,
                     self.time,
-                    s.iterations,
-                    s.rel_residual,
-                    p.len(),
-                    wall.elapsed().as_secs_f64()
+                    dt,
+                    &info,
+                    &self.state.particles,
+                    &wall,
                 );
-                if let Some(e) = info
-                    .coupling
-                    .as_ref()
-                    .and_then(|c| c.first_failure.as_ref())
-                {
-                    eprintln!("  the other form took over after: {e}");
-                }
             }
             rec.pressure.add(s.iterations, s.rel_residual, s.converged);
             rec.substep_log.push(SubstepRecord {

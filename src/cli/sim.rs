@@ -34,8 +34,9 @@ pub struct SimArgs {
     /// has ~8× fewer particles. Recorded in the manifest; --resume reuses it.
     #[arg(long, value_parser = positive_scale)]
     scale: Option<f64>,
-    /// Print every substep (time, Δt, solver iterations and residual, wall
-    /// time) to stderr: for following a slow frame.
+    /// Print every substep of a liquid scene (time, Δt, solver iterations
+    /// and residual, wall time, fastest particle) to stderr: for following a
+    /// slow frame.
     #[arg(short = 'v', long)]
     verbose: bool,
 }
