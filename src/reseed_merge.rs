@@ -27,16 +27,25 @@ pub(super) fn merge_into(parts: &mut Particles, keep: usize, gone: usize) {
     parts.mass[keep] = m;
 }
 
-/// Removes particles of codimension `kind` closer than the threshold to a
-/// surviving one, merging mass and momentum. Returns the number removed.
-pub(super) fn remove_close(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
+/// Indices and positions of the particles of codimension `kind`; `None`
+/// when there are fewer than two (nothing to merge).
+fn of_kind(parts: &Particles, kind: Codim) -> Option<(Vec<usize>, Vec<Vec3>)> {
     let idx: Vec<usize> = (0..parts.len())
         .filter(|&i| parts.codim[i] == kind)
         .collect();
     if idx.len() < 2 {
-        return 0;
+        return None;
     }
-    let pts: Vec<Vec3> = idx.iter().map(|&i| parts.x[i]).collect();
+    let pts = idx.iter().map(|&i| parts.x[i]).collect();
+    Some((idx, pts))
+}
+
+/// Removes particles of codimension `kind` closer than the threshold to a
+/// surviving one, merging mass and momentum. Returns the number removed.
+pub(super) fn remove_close(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
+    let Some((idx, pts)) = of_kind(parts, kind) else {
+        return 0;
+    };
     let r = prm.remove_distance * prm.h;
     let grid = CellGrid::build(&pts, r);
     let mut alive = vec![true; parts.len()];
@@ -78,13 +87,9 @@ pub(super) fn merge_light(parts: &mut Particles, kind: Codim, prm: &ReseedParams
     if prm.light_fraction <= 0.0 && prm.min_mass <= 0.0 {
         return 0;
     }
-    let idx: Vec<usize> = (0..parts.len())
-        .filter(|&i| parts.codim[i] == kind)
-        .collect();
-    if idx.len() < 2 {
+    let Some((idx, pts)) = of_kind(parts, kind) else {
         return 0;
-    }
-    let pts: Vec<Vec3> = idx.iter().map(|&i| parts.x[i]).collect();
+    };
     let grid = CellGrid::build(&pts, prm.h);
     // The light test of `p` given the current masses and survivors: the
     // nearest alive non-fixed neighbour when p is light.
