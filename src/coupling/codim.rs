@@ -18,8 +18,9 @@
 //!   otherwise turn the upstream edge of every jet's surface layer into
 //!   filaments).
 //! - 2→3: a filament particle without filament neighbours is a droplet.
-//!
-//! - 2→0: a filament particle engulfed by the volume (see [`new_codim`]).
+//! - 2→0 and 2→1 (not in the paper, see [`new_codim`]): a filament particle
+//!   engulfed by the volume returns to it; one with a volume particle within
+//!   h joins the body's surface layer.
 //!
 //! Masses do not change (a particle keeps its mass through a transition),
 //! so mass is conserved exactly. A particle that joins the volume (1→0,
