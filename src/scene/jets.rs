@@ -32,6 +32,23 @@ pub struct JetSettings {
     /// Time the jet stops emitting (s); `None` = never.
     #[serde(default)]
     pub stop: Option<f64>,
+    /// Layout of a layer's circles: `aligned` (Appendix F: every circle
+    /// starts at angle 0, which lines the particles up in quasi-hexagonal
+    /// spokes) or `staggered` (circle k turned by frac(k φ) of its angular
+    /// step: no spokes).
+    #[serde(default)]
+    pub pattern: JetPattern,
+}
+
+/// `jets[].pattern`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum JetPattern {
+    /// Every circle starts at angle 0 (Appendix F).
+    #[default]
+    Aligned,
+    /// Circle k turned by frac(k φ) of its angular step.
+    Staggered,
 }
 
 /// Linear solver of the monolithic coupling system (eq. 24).
@@ -142,6 +159,7 @@ impl JetSettings {
             start: self.start,
             stop: self.stop.unwrap_or(f64::INFINITY),
             density: rho,
+            stagger: self.pattern == JetPattern::Staggered,
         }
     }
 }

@@ -20,7 +20,9 @@ mod sample;
 mod validate;
 
 pub use films::{sample_films, FilmBody, FilmSettings, RimModulation, WindSettings};
-pub use jets::{BandSetting, CouplingMethod, CouplingSettings, FaceMassSetting, JetSettings};
+pub use jets::{
+    BandSetting, CouplingMethod, CouplingSettings, FaceMassSetting, JetPattern, JetSettings,
+};
 pub use load::{load, load_str, load_str_scaled, SceneError};
 pub use sample::{sample_bodies, SampleReport};
 
