@@ -310,3 +310,37 @@ fn the_mass_floor_stops_insertion_and_merges_what_is_below_it() {
     let l = ReseedParams::liquid(h, 1000.0);
     assert!((l.min_mass - 0.1 * 1000.0 * (0.025 as Real).powi(3)).abs() < 1e-15);
 }
+
+#[test]
+fn a_light_particle_merges_at_the_centre_of_mass() {
+    // a light sheet particle between lattice sites merges into its nearest
+    // neighbour, which moves to the pair's centre of mass: mass, momentum
+    // and the first moment Σ m x are all unchanged
+    let (h, s) = (0.1, 0.04);
+    let mut p = flat_sheet(5, s, None);
+    p.push(
+        Vec3::new(2.3 * s, 2.0 * s, 0.001),
+        Vec3::new(0.0, 0.0, 1.0),
+        0.02,
+        0.01,
+        Codim::Sheet,
+    );
+    let first = |p: &Particles| -> Vec3 { (0..p.len()).map(|i| p.x[i] * p.mass[i]).sum() };
+    let (m0, q0, x0) = (p.total_mass(), momentum(&p), first(&p));
+    let prm = ReseedParams::paper(h);
+    assert_eq!(merge::merge_light(&mut p, Codim::Sheet, &prm), 1);
+    assert_eq!(p.len(), 25);
+    assert!((p.total_mass() - m0).abs() < 1e-12);
+    assert!((momentum(&p) - q0).norm() < 1e-12);
+    assert!(
+        (first(&p) - x0).norm() < 1e-14,
+        "{}",
+        (first(&p) - x0).norm()
+    );
+    // the survivor (the lattice site (2, 2), mass 1.04) moved towards it
+    let k = 2 * 5 + 2;
+    let want = (Vec3::new(2.0 * s, 2.0 * s, 0.0) * 1.04
+        + Vec3::new(2.3 * s, 2.0 * s, 0.001) * 0.02)
+        / 1.06;
+    assert!((p.x[k] - want).norm() < 1e-15, "{} vs {want}", p.x[k]);
+}

@@ -355,7 +355,7 @@ fn preset_wind_blows_a_steady_bag_with_the_young_laplace_apex() {
 
 #[test]
 fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
-    // the shipped preset (s = 3 mm): the neck pinches in frame 13 and the
+    // the shipped preset (s = 2 mm): the neck pinches in frame 13 and the
     // film splits into two films, each spanning its ring as a disk (paper
     // Fig. 6), with a few droplets between them; mass stays exact
     use codimfx::particles::Codim;

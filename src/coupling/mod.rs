@@ -158,7 +158,9 @@ pub struct CouplingInfo {
     pub released_faces: usize,
     /// Solves redone after outlier velocities, with the constraint faces
     /// of the enclosed cells around them released
-    /// ([`release::outlier_cells`]; at most [`MAX_OUTLIER_ROUNDS`]).
+    /// ([`release::outlier_cells`]; at most [`MAX_OUTLIER_ROUNDS`]), plus
+    /// the one redone after both methods failed, with the weakly pinned
+    /// cells released ([`faces::Constraints::release_weak`]).
     pub outlier_rounds: usize,
     /// Why the chosen method failed, when it did.
     #[serde(skip)]
@@ -274,9 +276,14 @@ pub fn solve(
     let bound = release::outlier_bound(v_ref, sc.sigma, sc.density, sc.dx);
     // cells around which the solve found outliers (release::outlier_cells)
     let mut around: Vec<usize> = Vec::new();
+    // set after both methods failed: the weakly pinned cells are released
+    let mut weak = false;
     let (k, vstar, sys, x, kept, u) = loop {
         let mut k = constrained.clone();
         info.released_faces = released + k.release_around(grid, &full, &around);
+        if weak {
+            info.released_faces += k.release_weak(grid, &full);
+        }
         info.faces = k.len();
         if k.is_empty() {
             return solve_uncoupled(grid, solids, parts, prm, dt, layers, &surf, info, t);
@@ -296,8 +303,9 @@ pub fn solve(
             Method::Schur => [Form::Reduced, Form::Monolithic],
         };
         let mut attempt = None;
+        let mut failed = None;
         for (n, form) in order.into_iter().enumerate() {
-            let t = if n == 0 && around.is_empty() {
+            let t = if n == 0 && around.is_empty() && !weak {
                 t
             } else {
                 Instant::now()
@@ -325,13 +333,22 @@ pub fn solve(
                     info.method_fallbacks += 1;
                     info.first_failure = Some(e.to_string());
                 }
-                Err(e) => {
-                    return Err(CouplingError::BothFailed {
-                        first: info.first_failure.take().unwrap_or_default(),
-                        second: Box::new(e),
-                    })
-                }
+                Err(e) => failed = Some(e),
             }
+        }
+        if let Some(e) = failed {
+            // both failed: once, release the weakly pinned enclosed cells
+            // and solve again (counted as a release round)
+            let mut probe = k.clone();
+            if !weak && probe.release_weak(grid, &full) > 0 {
+                weak = true;
+                info.outlier_rounds += 1;
+                continue;
+            }
+            return Err(CouplingError::BothFailed {
+                first: info.first_failure.take().unwrap_or_default(),
+                second: Box::new(e),
+            });
         }
         let (sys, x, kept) = attempt.expect("a solve succeeded or returned");
         let q = &x[sys.qo..sys.qo + sys.nq];

@@ -88,7 +88,9 @@ pub struct Fallbacks {
     #[serde(default)]
     pub released_faces: u64,
     /// Coupled solves redone after outlier velocities, with the enclosed
-    /// cells around them released (`coupling::release::outlier_cells`).
+    /// cells around them released (`coupling::release::outlier_cells`), or
+    /// after both methods failed, with the weakly pinned enclosed cells
+    /// released (`Constraints::release_weak`).
     #[serde(default)]
     pub outlier_resolves: u64,
 }
