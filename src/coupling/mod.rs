@@ -339,8 +339,7 @@ pub fn solve(
         if let Some(e) = failed {
             // both failed: once, release the weakly pinned enclosed cells
             // and solve again (counted as a release round)
-            let mut probe = k.clone();
-            if !weak && probe.release_weak(grid, &full) > 0 {
+            if !weak && k.release_weak(grid, &full) > 0 {
                 weak = true;
                 info.outlier_rounds += 1;
                 continue;
