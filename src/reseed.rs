@@ -80,7 +80,17 @@ pub struct ReseedParams {
     /// ([`ReseedParams::liquid`]); film scenes, whose sheets may be µm thin,
     /// leave it off.
     pub min_mass: Real,
+    /// A sheet particle heavier than this multiple of the mean mass of its
+    /// sheet neighbours within h is a droplet, not film: it becomes a point
+    /// particle (`heavy_shed`); 0 disables it. Off in
+    /// [`ReseedParams::paper`]; on for scenes whose rings move, where the
+    /// pinch gathers the neck's film into a few particles
+    /// ([`HEAVY_FRACTION`], docs/decisions.md).
+    pub heavy_fraction: Real,
 }
+
+/// [`ReseedParams::heavy_fraction`] of scenes whose rings move.
+pub const HEAVY_FRACTION: Real = 10.0;
 
 impl ReseedParams {
     /// The paper's values for support radius `h`, removal at 0.15 h.
@@ -95,6 +105,7 @@ impl ReseedParams {
             absorb_distance: 0.3,
             light_fraction: 0.2,
             min_mass: 0.0,
+            heavy_fraction: 0.0,
         }
     }
 
@@ -143,6 +154,10 @@ pub struct ReseedCounts {
     /// filament frame (a counted guard, see [`reseed_guarded`]).
     #[serde(default)]
     pub filament_skipped: u64,
+    /// Sheet particles much heavier than their sheet neighbours turned
+    /// into points ([`ReseedParams::heavy_fraction`]).
+    #[serde(default)]
+    pub heavy_shed: u64,
 }
 
 impl ReseedCounts {
@@ -170,6 +185,7 @@ impl ReseedCounts {
         self.light_merged += o.light_merged;
         self.boundary_absorbed += o.boundary_absorbed;
         self.filament_skipped += o.filament_skipped;
+        self.heavy_shed += o.heavy_shed;
     }
 }
 
@@ -409,7 +425,7 @@ fn insert(parts: &mut Particles, kind: Codim, cands: Vec<Vec3>, prm: &ReseedPara
 
 #[path = "reseed_merge.rs"]
 mod merge;
-use merge::{absorb_into_boundary, absorb_into_rims, merge_light, remove_close};
+use merge::{absorb_into_boundary, absorb_into_rims, merge_light, remove_close, shed_heavy};
 
 /// Reseeds sheets and filaments (Algorithm 1, line 3). `frames[i]` and
 /// `nbrs(i)` are particle i's local frame and neighbours within h, computed
@@ -484,6 +500,7 @@ pub fn reseed_guarded<'a>(
         merge_light(parts, Codim::Sheet, prm) + merge_light(parts, Codim::Filament, prm);
     c.sheet_removed = remove_close(parts, Codim::Sheet, prm);
     c.filament_removed = remove_close(parts, Codim::Filament, prm);
+    c.heavy_shed = shed_heavy(parts, prm);
     c
 }
 

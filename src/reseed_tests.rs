@@ -344,3 +344,23 @@ fn a_light_particle_merges_at_the_centre_of_mass() {
         / 1.06;
     assert!((p.x[k] - want).norm() < 1e-15, "{} vs {want}", p.x[k]);
 }
+
+#[test]
+fn a_sheet_particle_far_heavier_than_its_neighbours_becomes_a_droplet() {
+    // one lattice site holds 20× its neighbours' mass: with heavy_fraction
+    // 10 it turns into a point, mass and momentum unchanged; off (0, the
+    // paper's setting) nothing changes
+    let (h, s) = (0.1, 0.04);
+    let mut p = flat_sheet(5, s, None);
+    let k = 2 * 5 + 2;
+    p.mass[k] = 21.0;
+    let (m0, q0) = (p.total_mass(), momentum(&p));
+    let mut prm = ReseedParams::paper(h);
+    assert_eq!(merge::shed_heavy(&mut p, &prm), 0);
+    prm.heavy_fraction = 10.0;
+    assert_eq!(merge::shed_heavy(&mut p, &prm), 1);
+    assert_eq!(p.codim[k], Codim::Point);
+    assert_eq!(p.codim.iter().filter(|c| **c == Codim::Point).count(), 1);
+    assert!((p.total_mass() - m0).abs() < 1e-12);
+    assert!((momentum(&p) - q0).norm() < 1e-12);
+}

@@ -46,6 +46,9 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
         .any(|b| matches!(b, FilmBody::Cylinder { ring_speed, .. } if *ring_speed != 0.0));
     if let Some(r) = prm.reseed.as_mut() {
         r.gap_lines = moving_rings;
+        if moving_rings {
+            r.heavy_fraction = crate::reseed::HEAVY_FRACTION;
+        }
     }
     prm.solver = BicgstabParams {
         tol: f.solver_tolerance,
