@@ -140,6 +140,31 @@ fn ilu_orders_solve_the_same_system() {
     }
 }
 
+/// The particle block stored once for the three velocity components
+/// (`coupling.shared_block`, the default) is a storage change only: the
+/// same droplet gives the same iterations, pressures and velocities as
+/// general rows, bit for bit.
+#[test]
+fn the_shared_particle_block_gives_the_general_rows_bit_for_bit() {
+    let mut runs = Vec::new();
+    for shared in [true, false] {
+        let (mut st, mut prm) = droplet(4.0, Method::Monolithic);
+        prm.coupling.as_mut().unwrap().shared_block = shared;
+        let mut its = Vec::new();
+        for _ in 0..3 {
+            let info = step(&mut st, &prm, 0.003, &mut StageTimes::default()).unwrap();
+            let c = info.coupling.unwrap();
+            assert!(c.eq24_residual.unwrap() <= 1e-8, "{shared}: {c:?}");
+            assert!(c.faces > 0 && c.particles > 0);
+            its.push((c.iterations, c.nonzeros, c.interior_pressure.to_bits()));
+        }
+        runs.push((st, its));
+    }
+    assert_eq!(runs[0].1, runs[1].1);
+    assert_eq!(runs[0].0.particles.v, runs[1].0.particles.v);
+    assert_eq!(runs[0].0.particles.x, runs[1].0.particles.x);
+}
+
 /// The dripping preset at half resolution for 0.1 s: the jet leaves its
 /// nozzle at the jet speed (the inflow disk holds the column's back, so
 /// tension does not squeeze the liquid back up the pipe), every coupled

@@ -31,7 +31,9 @@ use crate::grid::extrapolate::{constrain_solids, extrapolate};
 use crate::grid::pcg::{NotFinite, PcgParams};
 use crate::grid::projection::{project_liquid, Poisson};
 use crate::grid::MacGrid;
-use crate::linsolve::{bicgstab, BicgstabParams, Csr, Ilu0, SolveError};
+use crate::linsolve::{
+    bicgstab, BicgstabParams, Csr, Ilu0, Operator, Preconditioner, SolveError, TripledIlu,
+};
 use crate::math::{Real, Vec3};
 use crate::mls::{FitStats, MlsError};
 use crate::particles::Particles;
@@ -42,7 +44,7 @@ use serde::{Deserialize, Serialize};
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
 pub use system::IluOrder;
-use system::{assemble, eq24_residual, Form, Scalars};
+use system::{assemble, eq24_residual, Form, Scalars, SystemMatrix};
 pub use warm::WarmStart;
 
 /// How the coupled system is solved.
@@ -95,6 +97,9 @@ pub struct CouplingParams {
     pub ilu_order: IluOrder,
     /// Keep the λ–λ fill of the particle rows in ILU(0)'s pattern.
     pub face_fill: bool,
+    /// Store the monolithic system's particle block once for the three
+    /// velocity components ([`crate::linsolve::Tripled`]; same results).
+    pub shared_block: bool,
     /// Particle side.
     pub surface: SurfaceParams,
     /// Pressure PCG rule, used when there are no constraint faces.
@@ -521,17 +526,36 @@ fn solve_form(
         sc,
         prm.ilu_order,
         prm.face_fill,
+        prm.shared_block,
     )
     .map_err(solve_err("coupled system assembly"))?;
-    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("coupled system"))?;
-    info.unknowns = a.nrows;
-    info.nonzeros = a.val.len();
+    let view = match &sys.matrix {
+        SystemMatrix::Shared(m) => View::Shared(m),
+        SystemMatrix::General(m) => {
+            View::General(Csr::from_faer(m.as_ref()).map_err(solve_err("coupled system"))?)
+        }
+    };
+    let op: &dyn Operator = match &view {
+        View::Shared(m) => *m,
+        View::General(a) => a,
+    };
+    let n = op.dims().0;
+    info.unknowns = n;
+    info.nonzeros = match &view {
+        View::Shared(m) => m.nonzeros(),
+        View::General(a) => a.val.len(),
+    };
     info.assemble_s += t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let ilu = Ilu0::new(&a).map_err(solve_err("coupled system ILU(0)"))?;
+    let ilu: Box<dyn Preconditioner> = match &view {
+        View::Shared(m) => {
+            Box::new(TripledIlu::from_tripled(m).map_err(solve_err("coupled system ILU(0)"))?)
+        }
+        View::General(a) => Box::new(Ilu0::new(a).map_err(solve_err("coupled system ILU(0)"))?),
+    };
     info.factor_s += t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let mut x = vec![0.0; a.nrows];
+    let mut x = vec![0.0; n];
     for (i, u) in surf.u.iter().enumerate() {
         for d in 0..3 {
             x[sys.u_row(i, d)] = u[d];
@@ -541,12 +565,12 @@ fn solve_form(
         let pois = reduced.as_ref().unwrap_or(full);
         let mut xw = x.clone();
         let n = w.seed(grid, pois, k, &sys, sc, &mut xw);
-        if n > 0 && warm::residual_norm(&a, &sys.rhs, &xw) < warm::residual_norm(&a, &sys.rhs, &x) {
+        if n > 0 && warm::residual_norm(op, &sys.rhs, &xw) < warm::residual_norm(op, &sys.rhs, &x) {
             x = xw;
             info.warm_seeded = n;
         }
     }
-    let s = bicgstab(&a, &sys.rhs, &mut x, &ilu, &prm.solver);
+    let s = bicgstab(op, &sys.rhs, &mut x, ilu.as_ref(), &prm.solver);
     info.solve_s += t.elapsed().as_secs_f64();
     let s = s.map_err(solve_err(match form {
         Form::Monolithic => "coupled system BiCGSTAB (monolithic)",
@@ -556,6 +580,14 @@ fn solve_form(
     info.rel_residual = s.rel_residual;
     let kept = WarmStart::capture(grid, reduced.as_ref().unwrap_or(full), k, &sys, &x, sc);
     Ok((sys, x, kept))
+}
+
+/// The assembled matrix as the solver reads it.
+enum View<'a> {
+    /// eq. (24) particles first, its particle block stored once.
+    Shared(&'a crate::linsolve::Tripled),
+    /// General compressed rows.
+    General(Csr<'a>),
 }
 
 /// u^{n+1} and the updated radii into the store (fixed particles keep theirs).

@@ -39,9 +39,12 @@ use super::surface::Surface;
 use super::{solve_err, CouplingError};
 use crate::grid::projection::Poisson;
 use crate::grid::NONE;
-use crate::linsolve::{csr::rows_from_triplets, reverse_cuthill_mckee, Csr, SolveError};
+use crate::linsolve::{
+    csr::rows_from_triplets, reverse_cuthill_mckee, split_halves, Csr, SolveError, Tripled,
+};
 use crate::math::{Real, Vec3};
 use faer::sparse::{SparseRowMat, Triplet};
+use rayon::prelude::*;
 
 /// Smallest face-mass fraction. The monolithic form's face rows divide by
 /// it: a massless face outside the sheet would make entries of size
@@ -94,10 +97,19 @@ pub enum IluOrder {
     ParticlesFirst,
 }
 
+/// The matrix of an assembled system.
+pub enum SystemMatrix {
+    /// General compressed rows.
+    General(SparseRowMat<usize, Real>),
+    /// The monolithic form ordered particles first, its particle block
+    /// `I₃ ⊗ P` stored once ([`Tripled`]).
+    Shared(Tripled),
+}
+
 /// A sparse system and its right-hand side.
 pub struct Assembled {
     /// The matrix.
-    pub matrix: SparseRowMat<usize, Real>,
+    pub matrix: SystemMatrix,
     /// Right-hand side.
     pub rhs: Vec<Real>,
     /// Offset of the q block.
@@ -167,6 +179,12 @@ fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> 
 /// particle rows creates, which ILU(0) then keeps (ILU with one level of
 /// fill in the λ block). Neither changes the system, only the incomplete
 /// factorisation ILU(0) computes.
+///
+/// With `shared`, the monolithic form ordered particles first is built as
+/// [`SystemMatrix::Shared`]: its particle block is `I₃ ⊗ P`, assembled
+/// once (the values and their summation order are those of the general
+/// rows; tested). Otherwise, and for the other forms,
+/// [`SystemMatrix::General`].
 #[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
 pub fn assemble(
     form: Form,
@@ -178,6 +196,7 @@ pub fn assemble(
     sc: Scalars,
     order: IluOrder,
     face_fill: bool,
+    shared: bool,
 ) -> Result<Assembled, SolveError> {
     let nq = sys.a.len();
     let np = surf.len();
@@ -190,18 +209,38 @@ pub fn assemble(
         Form::Reduced => (3 * np, 0, n),
     };
     let l = Csr::from_faer(surf.laplacian.as_ref())?;
+    // RCM, then its two halves apart and their separator last, so that the
+    // shared format's triangular solves work the halves in parallel (the
+    // order is the same in both formats and for any thread count)
+    let mut halves = [np, np];
     let slot = reorder.then(|| {
         let rcm = reverse_cuthill_mckee(np, l.row_ptr, l.col);
+        let (order, a, b) = split_halves(np, l.row_ptr, l.col, &rcm);
+        halves = [a, b];
         let mut slot = vec![0; np];
-        for (s, &i) in rcm.iter().enumerate() {
+        for (s, &i) in order.iter().enumerate() {
             slot[i] = s;
         }
         slot
     });
     let ur = |i: usize, d: usize| uo + 3 * slot.as_ref().map_or(i, |s| s[i]) + d;
     let vol = sc.density * sc.dx.powi(3);
-    let mut t: Vec<Triplet<usize, usize, Real>> =
-        Vec::with_capacity(7 * nq + 3 * l.val.len() + 4 * k.col.len() + 4 * k.len());
+    let shared_p = shared && reorder;
+    // ĉ_i of particle i's tension/viscosity row (eq. 21/22, eq. 13)
+    let ch = |i: usize| {
+        // the implicit MLS viscosity μΔt V L u of eq. (13), V = m/ρ, on
+        // particles that are not the surface layer of a volume (whose
+        // velocity the grid's viscosity sets)
+        let visc = if surf.attached[i] {
+            0.0
+        } else {
+            sc.viscosity * sc.dt * surf.mass[i] / sc.density
+        };
+        (sc.sigma * sc.dt * sc.dt * surf.area[i] + visc) / vol
+    };
+    let mut t: Vec<Triplet<usize, usize, Real>> = Vec::with_capacity(
+        7 * nq + 3 * l.val.len() * (!shared_p) as usize + 4 * k.col.len() + 4 * k.len(),
+    );
     let mut rhs = vec![0.0; n];
     pressure_block(sys, qo, &mut t);
     rhs[qo..qo + nq].copy_from_slice(&sys.b);
@@ -219,22 +258,19 @@ pub fn assemble(
         let mh = surf.mass[i] / vol;
         for d in 0..3 {
             let r = ur(i, d);
-            t.push(Triplet::new(r, r, -mh));
+            if !shared_p {
+                t.push(Triplet::new(r, r, -mh));
+            }
             if surf.fixed[i] {
                 rhs[r] = -mh * surf.u[i][d];
                 continue;
             }
-            // implicit tension, and for particles that are not the surface
-            // layer of a volume (whose velocity the grid's viscosity sets)
-            // the implicit MLS viscosity μΔt V L u of eq. (13), V = m/ρ
-            let visc = if surf.attached[i] {
-                0.0
-            } else {
-                sc.viscosity * sc.dt * surf.mass[i] / sc.density
-            };
-            let ch = (sc.sigma * sc.dt * sc.dt * surf.area[i] + visc) / vol;
-            for kk in l.row_ptr[i]..l.row_ptr[i + 1] {
-                t.push(Triplet::new(r, ur(l.col[kk], d), ch * l.val[kk]));
+            // implicit tension and viscosity
+            if !shared_p {
+                let ch = ch(i);
+                for kk in l.row_ptr[i]..l.row_ptr[i + 1] {
+                    t.push(Triplet::new(r, ur(l.col[kk], d), ch * l.val[kk]));
+                }
             }
             rhs[r] = -(surf.mass[i] * surf.u[i][d]
                 + sc.dt * (sc.sigma * surf.area[i] * lx[i][d] + surf.force[i][d]))
@@ -323,12 +359,46 @@ pub fn assemble(
             }
         }
     }
-    let matrix = if reorder {
+    let matrix = if let (true, Some(slot)) = (shared_p, slot.as_ref()) {
+        // P by slot: −m̂ on the diagonal, then ĉ L (fixed: −m̂ alone),
+        // summed in the general rows' order
+        let mut at = vec![0; np];
+        for (i, &s) in slot.iter().enumerate() {
+            at[s] = i;
+        }
+        let rows: Vec<Vec<(u32, Real)>> = at
+            .par_iter()
+            .map(|&i| {
+                let mut row = vec![(slot[i] as u32, -surf.mass[i] / vol)];
+                if !surf.fixed[i] {
+                    let ch = ch(i);
+                    for kk in l.row_ptr[i]..l.row_ptr[i + 1] {
+                        row.push((slot[l.col[kk]] as u32, ch * l.val[kk]));
+                    }
+                }
+                // stable: duplicates keep their order
+                row.sort_by_key(|e| e.0);
+                row.dedup_by(|b, a| {
+                    let same = a.0 == b.0;
+                    if same {
+                        a.1 += b.1;
+                    }
+                    same
+                });
+                row
+            })
+            .collect();
+        let rest = rows_from_triplets(n, n, &t)?;
+        let rest = Csr::from_faer(rest.as_ref())?;
+        SystemMatrix::Shared(Tripled::from_parts(np, halves, &rows, &rest)?)
+    } else if reorder {
         // the triplets are out of row order: bucket them by row first
-        rows_from_triplets(n, n, &t)?
+        SystemMatrix::General(rows_from_triplets(n, n, &t)?)
     } else {
-        SparseRowMat::try_new_from_triplets(n, n, &t)
-            .map_err(|e| SolveError::Dimension(format!("{e:?}")))?
+        SystemMatrix::General(
+            SparseRowMat::try_new_from_triplets(n, n, &t)
+                .map_err(|e| SolveError::Dimension(format!("{e:?}")))?,
+        )
     };
     Ok(Assembled {
         matrix,
@@ -366,9 +436,15 @@ pub(super) fn eq24_residual(
         sc,
         IluOrder::Equation,
         false,
+        false,
     )
     .map_err(solve_err("eq. (24) residual"))?;
-    let a = Csr::from_faer(sys.matrix.as_ref()).map_err(solve_err("eq. (24) residual"))?;
+    let SystemMatrix::General(m) = &sys.matrix else {
+        return Err(solve_err("eq. (24) residual")(SolveError::Dimension(
+            "the equation order came out in the shared format".into(),
+        )));
+    };
+    let a = Csr::from_faer(m.as_ref()).map_err(solve_err("eq. (24) residual"))?;
     let mut x = vec![0.0; a.nrows];
     x[sys.qo..sys.qo + sys.nq].copy_from_slice(q);
     for (i, v) in u.iter().enumerate() {

@@ -19,7 +19,7 @@ use super::faces::Constraints;
 use super::system::{Assembled, Scalars};
 use crate::grid::projection::Poisson;
 use crate::grid::MacGrid;
-use crate::linsolve::Csr;
+use crate::linsolve::Operator;
 use crate::math::Real;
 
 /// The previous substep's solution, by global cell (and face axis).
@@ -102,7 +102,7 @@ impl WarmStart {
 }
 
 /// ‖b − A x‖.
-pub fn residual_norm(a: &Csr, b: &[Real], x: &[Real]) -> Real {
+pub fn residual_norm(a: &dyn Operator, b: &[Real], x: &[Real]) -> Real {
     let mut ax = vec![0.0; b.len()];
     a.matvec(x, &mut ax);
     b.iter()

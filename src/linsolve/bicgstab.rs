@@ -1,7 +1,7 @@
 //! Right-preconditioned BiCGSTAB (van der Vorst 1992), the solver the paper
 //! uses for eq. (24).
 
-use super::{dot, norm, Csr, Preconditioner, SolveError, SolveInfo};
+use super::{dot, norm, Operator, Preconditioner, SolveError, SolveInfo};
 use rayon::prelude::*;
 
 /// Restarts allowed after a ρ breakdown (the shadow residual is reset to the current residual).
@@ -34,7 +34,7 @@ fn axpy_into(out: &mut [f64], a: &[f64], s: f64, b: &[f64]) {
 
 /// r = b − A x (with `tmp` as scratch); returns ‖r‖. The recursive residual
 /// of BiCGSTAB drifts, so convergence is always confirmed with this one.
-fn true_residual(a: &Csr, b: &[f64], x: &[f64], tmp: &mut [f64], r: &mut [f64]) -> f64 {
+fn true_residual(a: &dyn Operator, b: &[f64], x: &[f64], tmp: &mut [f64], r: &mut [f64]) -> f64 {
     a.matvec(x, tmp);
     axpy_into(r, b, -1.0, tmp);
     norm(r)
@@ -44,18 +44,18 @@ fn true_residual(a: &Csr, b: &[f64], x: &[f64], tmp: &mut [f64], r: &mut [f64]) 
 /// the true relative residual, or why it failed. Never leaves a non-finite
 /// value in `x`: on failure `x` holds the best finite iterate reached.
 pub fn bicgstab(
-    a: &Csr,
+    a: &dyn Operator,
     b: &[f64],
     x: &mut [f64],
     m: &dyn Preconditioner,
     prm: &BicgstabParams,
 ) -> Result<SolveInfo, SolveError> {
-    let n = a.nrows;
-    if a.ncols != n || b.len() != n || x.len() != n {
+    let (n, ncols) = a.dims();
+    if ncols != n || b.len() != n || x.len() != n {
         return Err(SolveError::Dimension(format!(
             "A {}×{}, b {}, x {}",
-            a.nrows,
-            a.ncols,
+            n,
+            ncols,
             b.len(),
             x.len()
         )));
@@ -212,7 +212,7 @@ pub fn bicgstab(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::linsolve::{Identity, Ilu0, Jacobi};
+    use crate::linsolve::{Csr, Identity, Ilu0, Jacobi};
     use faer::sparse::{SparseRowMat, Triplet};
 
     /// 2-D convection–diffusion on an m×m grid (non-symmetric), Dirichlet.

@@ -59,6 +59,18 @@ impl<'a> Csr<'a> {
     }
 }
 
+impl super::Operator for Csr<'_> {
+    fn dims(&self) -> (usize, usize) {
+        (self.nrows, self.ncols)
+    }
+    fn matvec(&self, x: &[f64], y: &mut [f64]) {
+        Csr::matvec(self, x, y)
+    }
+    fn all_finite(&self) -> bool {
+        Csr::all_finite(self)
+    }
+}
+
 /// The compressed-row matrix of `t` (entries at the same position summed,
 /// in the order they appear in `t`). The entries are bucketed by row with a
 /// counting sort and each row's (column, value) pairs are sorted in place,

@@ -63,15 +63,16 @@ pub struct Ilu0 {
 }
 
 /// Strictly triangular rows: row i is `col[ptr[i]..ptr[i + 1]]`, `val[..]`.
-struct Triangle {
-    ptr: Vec<usize>,
-    col: Vec<u32>,
-    val: Vec<f64>,
+#[derive(Debug, PartialEq)]
+pub(super) struct Triangle {
+    pub(super) ptr: Vec<usize>,
+    pub(super) col: Vec<u32>,
+    pub(super) val: Vec<f64>,
 }
 
 impl Triangle {
     /// The entries `rows(i)` (index ranges into `col`/`val`) of every row.
-    fn gather(
+    pub(super) fn gather(
         n: usize,
         col: &[usize],
         val: &[f64],
@@ -95,68 +96,76 @@ impl Triangle {
     }
 }
 
+/// The ILU(0) factors of `a` in `a`'s own pattern: the values (L's below
+/// the diagonal, U's on and above it) and the position of each row's
+/// diagonal. A zero or missing pivot is reported with its row.
+fn factor(a: &Csr) -> Result<(Vec<f64>, Vec<usize>), SolveError> {
+    let n = a.nrows;
+    if a.ncols != n {
+        return Err(SolveError::Dimension(format!(
+            "ILU(0) of a {}×{} matrix",
+            a.nrows, a.ncols
+        )));
+    }
+    if n > u32::MAX as usize {
+        return Err(SolveError::Dimension(format!(
+            "ILU(0) of {n} rows: more than u32 indices hold"
+        )));
+    }
+    let (row_ptr, col) = (a.row_ptr, a.col);
+    let mut val = a.val.to_vec();
+    let mut diag = vec![usize::MAX; n];
+    for i in 0..n {
+        for k in row_ptr[i]..row_ptr[i + 1] {
+            if col[k] == i {
+                diag[i] = k;
+            }
+        }
+        if diag[i] == usize::MAX {
+            return Err(SolveError::ZeroPivot { row: i });
+        }
+    }
+    // position of column j in the current row i, via a dense marker
+    let mut pos = vec![usize::MAX; n];
+    for i in 0..n {
+        let (s, e) = (row_ptr[i], row_ptr[i + 1]);
+        for k in s..e {
+            pos[col[k]] = k;
+        }
+        for k in s..e {
+            let j = col[k];
+            if j >= i {
+                break;
+            }
+            let piv = val[diag[j]];
+            let lij = val[k] / piv;
+            val[k] = lij;
+            for kk in diag[j] + 1..row_ptr[j + 1] {
+                let p = pos[col[kk]];
+                if p != usize::MAX {
+                    val[p] -= lij * val[kk];
+                }
+            }
+        }
+        for k in s..e {
+            pos[col[k]] = usize::MAX;
+        }
+        let d = val[diag[i]];
+        if d == 0.0 || !d.is_finite() {
+            return Err(SolveError::ZeroPivot { row: i });
+        }
+    }
+    Ok((val, diag))
+}
+
 impl Ilu0 {
     /// Factorises `a`. A zero or missing pivot is reported with its row.
     pub fn new(a: &Csr) -> Result<Ilu0, SolveError> {
-        let n = a.nrows;
-        if a.ncols != n {
-            return Err(SolveError::Dimension(format!(
-                "ILU(0) of a {}×{} matrix",
-                a.nrows, a.ncols
-            )));
-        }
-        let row_ptr = a.row_ptr.to_vec();
-        let col = a.col.to_vec();
-        let mut val = a.val.to_vec();
-        let mut diag = vec![usize::MAX; n];
-        for i in 0..n {
-            for k in row_ptr[i]..row_ptr[i + 1] {
-                if col[k] == i {
-                    diag[i] = k;
-                }
-            }
-            if diag[i] == usize::MAX {
-                return Err(SolveError::ZeroPivot { row: i });
-            }
-        }
-        // position of column j in the current row i, via a dense marker
-        let mut pos = vec![usize::MAX; n];
-        for i in 0..n {
-            let (s, e) = (row_ptr[i], row_ptr[i + 1]);
-            for k in s..e {
-                pos[col[k]] = k;
-            }
-            for k in s..e {
-                let j = col[k];
-                if j >= i {
-                    break;
-                }
-                let piv = val[diag[j]];
-                let lij = val[k] / piv;
-                val[k] = lij;
-                for kk in diag[j] + 1..row_ptr[j + 1] {
-                    let p = pos[col[kk]];
-                    if p != usize::MAX {
-                        val[p] -= lij * val[kk];
-                    }
-                }
-            }
-            for k in s..e {
-                pos[col[k]] = usize::MAX;
-            }
-            let d = val[diag[i]];
-            if d == 0.0 || !d.is_finite() {
-                return Err(SolveError::ZeroPivot { row: i });
-            }
-        }
-        if n > u32::MAX as usize {
-            return Err(SolveError::Dimension(format!(
-                "ILU(0) of {n} rows: more than u32 indices hold"
-            )));
-        }
+        let (val, diag) = factor(a)?;
+        let (n, row_ptr) = (a.nrows, a.row_ptr);
         Ok(Ilu0 {
-            l: Triangle::gather(n, &col, &val, |i| row_ptr[i]..diag[i]),
-            u: Triangle::gather(n, &col, &val, |i| diag[i] + 1..row_ptr[i + 1]),
+            l: Triangle::gather(n, a.col, &val, |i| row_ptr[i]..diag[i]),
+            u: Triangle::gather(n, a.col, &val, |i| diag[i] + 1..row_ptr[i + 1]),
             diag: diag.iter().map(|&k| val[k]).collect(),
         })
     }

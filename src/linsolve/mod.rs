@@ -14,11 +14,23 @@ pub mod bicgstab;
 pub mod csr;
 pub mod ilu0;
 pub mod order;
+pub mod tripled;
 
 pub use bicgstab::{bicgstab, BicgstabParams};
 pub use csr::Csr;
 pub use ilu0::{Identity, Ilu0, Jacobi, Preconditioner};
-pub use order::reverse_cuthill_mckee;
+pub use order::{reverse_cuthill_mckee, split_halves};
+pub use tripled::{Tripled, TripledIlu};
+
+/// A square or rectangular linear map that BiCGSTAB can apply.
+pub trait Operator: Sync {
+    /// (rows, columns).
+    fn dims(&self) -> (usize, usize);
+    /// y = A x.
+    fn matvec(&self, x: &[f64], y: &mut [f64]);
+    /// True when every stored value is finite.
+    fn all_finite(&self) -> bool;
+}
 
 /// What a solve reached.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -95,6 +95,11 @@ pub struct CouplingSettings {
     /// particle); the stored values are zeros, the system is unchanged.
     #[serde(default = "default_face_fill")]
     pub face_fill: bool,
+    /// Store the monolithic system's particle block once for the three
+    /// velocity components (`I₃ ⊗ P`); `false` stores general rows. The
+    /// results are the same bit for bit; shared is faster.
+    #[serde(default = "default_shared_block")]
+    pub shared_block: bool,
 }
 
 /// `coupling.band`.
@@ -109,6 +114,10 @@ pub enum BandSetting {
 }
 
 fn default_face_fill() -> bool {
+    true
+}
+
+fn default_shared_block() -> bool {
     true
 }
 
@@ -133,6 +142,7 @@ impl Default for CouplingSettings {
             band: BandSetting::Extrapolated,
             ordering: crate::coupling::IluOrder::default(),
             face_fill: default_face_fill(),
+            shared_block: default_shared_block(),
         }
     }
 }
