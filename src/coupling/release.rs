@@ -26,6 +26,7 @@ use crate::grid::extrapolate::is_wall_face;
 use crate::grid::projection::Poisson;
 use crate::grid::{MacGrid, NONE};
 use crate::math::{Real, Vec3};
+use rayon::prelude::*;
 
 /// Smallest pinning ‖A z‖² of an enclosed cell's null mode before its
 /// constraint faces are released ([`Constraints::release_enclosed`]).
@@ -67,15 +68,28 @@ impl Constraints {
                 faces.push(self.index(a, f)?);
             }
         }
-        let mut rows: std::collections::BTreeMap<(u32, usize), Real> = Default::default();
+        // (A z) by particle row: the terms of each (particle, axis) summed
+        // in face order (a stable sort keeps it), the squares in row order
+        let mut terms: Vec<((u32, usize), Real)> = Vec::with_capacity(64);
         for &i in &faces {
             let (a, f) = self.faces[i];
             let s_cf = if f == c { -1.0 } else { 1.0 };
             for k in self.ptr[i]..self.ptr[i + 1] {
-                *rows.entry((self.col[k], a)).or_default() += self.val[k] * self.weight[i] * s_cf;
+                terms.push(((self.col[k], a), self.val[k] * self.weight[i] * s_cf));
             }
         }
-        let pin = rows.values().map(|v| v * v).sum::<Real>();
+        terms.sort_by_key(|e| e.0);
+        let mut pin = 0.0;
+        let mut k = 0;
+        while k < terms.len() {
+            let mut v = 0.0;
+            let key = terms[k].0;
+            while k < terms.len() && terms[k].0 == key {
+                v += terms[k].1;
+                k += 1;
+            }
+            pin += v * v;
+        }
         Some((faces, pin))
     }
 
@@ -98,17 +112,13 @@ impl Constraints {
                 holds_sheet[s] = true;
             }
         }
-        let mut drop = vec![false; self.len()];
-        for &c in sys.cells.iter().filter(|&&c| holds_sheet[c]) {
-            if let Some((faces, pin)) = self.null_mode(g, c) {
-                if pin < MIN_PIN {
-                    for i in faces {
-                        drop[i] = true;
-                    }
-                }
-            }
-        }
-        self.drop_faces(&drop)
+        let cells: Vec<usize> = sys
+            .cells
+            .iter()
+            .copied()
+            .filter(|&c| holds_sheet[c])
+            .collect();
+        self.release_below(g, &cells, MIN_PIN)
     }
 
     /// Releases the constraint faces of every liquid cell whose null mode
@@ -119,15 +129,20 @@ impl Constraints {
     /// polygon with staggered jets at frame 7 stagnated at 1e-5 with every
     /// Δt). Returns the number released.
     pub fn release_weak(&mut self, g: &MacGrid, sys: &Poisson) -> usize {
+        self.release_below(g, &sys.cells, WEAK_PIN)
+    }
+
+    /// Releases the faces of each of `cells` whose null mode is pinned by
+    /// less than `bound` (the cells tested in parallel); returns how many.
+    fn release_below(&mut self, g: &MacGrid, cells: &[usize], bound: Real) -> usize {
+        let loose: Vec<Vec<usize>> = cells
+            .par_iter()
+            .with_min_len(64)
+            .filter_map(|&c| self.null_mode(g, c).filter(|m| m.1 < bound).map(|m| m.0))
+            .collect();
         let mut drop = vec![false; self.len()];
-        for &c in &sys.cells {
-            if let Some((faces, pin)) = self.null_mode(g, c) {
-                if pin < WEAK_PIN {
-                    for i in faces {
-                        drop[i] = true;
-                    }
-                }
-            }
+        for i in loose.into_iter().flatten() {
+            drop[i] = true;
         }
         self.drop_faces(&drop)
     }

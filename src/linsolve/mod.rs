@@ -15,12 +15,14 @@ pub mod csr;
 pub mod ilu0;
 pub mod order;
 pub mod tripled;
+pub mod tripled_ilu;
 
 pub use bicgstab::{bicgstab, BicgstabParams};
 pub use csr::Csr;
 pub use ilu0::{Identity, Ilu0, Jacobi, Preconditioner};
 pub use order::{reverse_cuthill_mckee, split_halves};
-pub use tripled::{Tripled, TripledIlu};
+pub use tripled::Tripled;
+pub use tripled_ilu::TripledIlu;
 
 /// A square or rectangular linear map that BiCGSTAB can apply.
 pub trait Operator: Sync {

@@ -14,14 +14,14 @@
 //! particle row's entries left of its diagonal are particle entries of
 //! its own component, so eliminating them repeats P's elimination for
 //! each component: L, the particle part of U and the pivots are P's ILU(0)
-//! three times over, which [`TripledIlu::from_tripled`] computes once.
+//! three times over, which [`super::TripledIlu::from_tripled`] computes once.
 //! The factorisation, the products and the triangular solves update and
 //! sum every entry in the general format's order, so both give
 //! bit-identical results (tested), the shared one with about a third of the
 //! work and memory traffic for the particle block (`docs/benchmarks.md`).
 
 use super::ilu0::Triangle;
-use super::{Csr, Operator, Preconditioner, SolveError};
+use super::{Csr, Operator, SolveError};
 use rayon::prelude::*;
 
 /// Rows of at least this many particles are worked in parallel chunks.
@@ -30,17 +30,17 @@ const CHUNK: usize = 256;
 /// `I₃ ⊗ P` on the first 3·np rows and columns, plus the rest.
 #[derive(Debug, PartialEq)]
 pub struct Tripled {
-    n: usize,
-    np: usize,
+    pub(super) n: usize,
+    pub(super) np: usize,
     /// Particle slots `..halves[0]` and `halves[0]..halves[1]` are not
     /// coupled by P (see [`super::split_halves`]); the triangular solves
     /// work the two in parallel.
-    halves: [usize; 2],
+    pub(super) halves: [usize; 2],
     /// P by particle slot (columns are particle slots).
-    p: Triangle,
+    pub(super) p: Triangle,
     /// All other entries, by row of the whole matrix (columns ≥ 3·np in
     /// the particle rows).
-    rest: Triangle,
+    pub(super) rest: Triangle,
 }
 
 /// Splits each particle's three rows of `(col, val, rows)` into the shared
@@ -221,7 +221,7 @@ impl Tripled {
 
     /// Declares particle slots `..halves[0]` and `halves[0]..halves[1]`
     /// independent (P couples neither to the other; checked), so that the
-    /// triangular solves of [`TripledIlu`] work them in parallel.
+    /// triangular solves of [`super::TripledIlu`] work them in parallel.
     pub fn with_halves(mut self, halves: [usize; 2]) -> Result<Tripled, SolveError> {
         let [a, b] = halves;
         let p = &self.p;
@@ -295,338 +295,11 @@ impl Operator for Tripled {
     }
 }
 
-/// ILU(0) of a [`Tripled`] matrix with P's factors stored once.
-pub struct TripledIlu {
-    n: usize,
-    np: usize,
-    /// As [`Tripled`]'s.
-    halves: [usize; 2],
-    /// L of the particle rows (unit diagonal), by slot.
-    lp: Triangle,
-    /// U of the particle rows in particle columns, by slot.
-    up: Triangle,
-    /// Pivots of the particle rows, by slot.
-    dp: Vec<f64>,
-    /// Rows 3·np.. of L (all columns left of the diagonal); rows < 3·np empty.
-    lt: Triangle,
-    /// U entries right of the diagonal outside the shared part: the
-    /// particle rows' λ/pressure columns and the other rows' whole U.
-    ut: Triangle,
-    /// Pivots of rows 3·np.. (indexed from 3·np).
-    dt: Vec<f64>,
-}
-
-/// ILU(0) elimination of P's rows `rows` and of their entries outside P
-/// (Saad, Alg. 10.4): `pv` holds P's values from entry `pv.1` on, `rv` the
-/// rest's from entry `rv.1` on, and together they cover these rows and
-/// every row their pivots lie in. `pos` is an all-unset marker of n
-/// entries (left unset).
-fn eliminate(
-    p: &Triangle,
-    r: &Triangle,
-    pd: &[usize],
-    rows: std::ops::Range<usize>,
-    (pv, po): (&mut [f64], usize),
-    (rv, ro): (&mut [f64], usize),
-    pos: &mut [usize],
-) -> Result<(), SolveError> {
-    for s in rows {
-        let row = p.ptr[s]..p.ptr[s + 1];
-        for k in row.clone() {
-            pos[p.col[k] as usize] = k;
-        }
-        for k in row.clone() {
-            let j = p.col[k] as usize;
-            if j >= s {
-                break;
-            }
-            let l = pv[k - po] / pv[pd[j] - po];
-            pv[k - po] = l;
-            for kk in pd[j] + 1..p.ptr[j + 1] {
-                let q = pos[p.col[kk] as usize];
-                if q != usize::MAX {
-                    pv[q - po] -= l * pv[kk - po];
-                }
-            }
-        }
-        for k in row.clone() {
-            pos[p.col[k] as usize] = usize::MAX;
-        }
-        let dv = pv[pd[s] - po];
-        if dv == 0.0 || !dv.is_finite() {
-            return Err(SolveError::ZeroPivot { row: 3 * s });
-        }
-        for d in 0..3 {
-            let i = 3 * s + d;
-            for k in r.ptr[i]..r.ptr[i + 1] {
-                pos[r.col[k] as usize] = k;
-            }
-            for k in row.clone() {
-                let j = p.col[k] as usize;
-                if j >= s {
-                    break;
-                }
-                let (l, c) = (pv[k - po], 3 * j + d);
-                for kk in r.ptr[c]..r.ptr[c + 1] {
-                    let q = pos[r.col[kk] as usize];
-                    if q != usize::MAX {
-                        rv[q - ro] -= l * rv[kk - ro];
-                    }
-                }
-            }
-            for k in r.ptr[i]..r.ptr[i + 1] {
-                pos[r.col[k] as usize] = usize::MAX;
-            }
-        }
-    }
-    Ok(())
-}
-
-impl TripledIlu {
-    /// Factorises `a` and stores it shared; `Ok(None)` when `a` does not
-    /// have the structure (see [`Tripled::from_csr`]).
-    pub fn new(a: &Csr, np: usize) -> Result<Option<TripledIlu>, SolveError> {
-        match Tripled::from_csr(a, np) {
-            Some(m) => TripledIlu::from_tripled(&m).map(Some),
-            None => Ok(None),
-        }
-    }
-
-    /// ILU(0) of `m` (Saad, Alg. 10.4, as [`super::Ilu0`]): P's rows are
-    /// eliminated once for the three components, each component's λ and
-    /// pressure entries of the particle rows with P's multipliers, then
-    /// the remaining rows as in the general format. Every entry receives
-    /// the same updates in the same order as there, so the factors are
-    /// the general ones, bit for bit. A zero or missing pivot is reported
-    /// with its row of the whole matrix.
-    pub fn from_tripled(m: &Tripled) -> Result<TripledIlu, SolveError> {
-        let (n, np) = (m.n, m.np);
-        let n3 = 3 * np;
-        let (p, r) = (&m.p, &m.rest);
-        let mut pv = p.val.clone();
-        let mut rv = r.val.clone();
-        let find = |t: &Triangle, i: usize, c: usize| {
-            (t.ptr[i]..t.ptr[i + 1]).find(|&k| t.col[k] as usize == c)
-        };
-        let mut pd = Vec::with_capacity(np);
-        for s in 0..np {
-            pd.push(find(p, s, s).ok_or(SolveError::ZeroPivot { row: 3 * s })?);
-        }
-        let mut rd = Vec::with_capacity(n - n3);
-        for i in n3..n {
-            rd.push(find(r, i, i).ok_or(SolveError::ZeroPivot { row: i })?);
-        }
-        // the two halves in parallel (each row's pivots lie in its own half),
-        // then the separator; slots of P (< np) and columns of the rest
-        // (≥ 3np) never overlap in a marker
-        let [ha, hb] = m.halves;
-        {
-            let (pab, _) = pv.split_at_mut(p.ptr[hb]);
-            let (pa, pb) = pab.split_at_mut(p.ptr[ha]);
-            let (rab, _) = rv.split_at_mut(r.ptr[3 * hb]);
-            let (ra, rb) = rab.split_at_mut(r.ptr[3 * ha]);
-            let (fa, fb) = rayon::join(
-                || eliminate(p, r, &pd, 0..ha, (pa, 0), (ra, 0), &mut vec![usize::MAX; n]),
-                || {
-                    let (po, ro) = (p.ptr[ha], r.ptr[3 * ha]);
-                    eliminate(
-                        p,
-                        r,
-                        &pd,
-                        ha..hb,
-                        (pb, po),
-                        (rb, ro),
-                        &mut vec![usize::MAX; n],
-                    )
-                },
-            );
-            fa?;
-            fb?;
-        }
-        let mut pos = vec![usize::MAX; n];
-        eliminate(p, r, &pd, hb..np, (&mut pv, 0), (&mut rv, 0), &mut pos)?;
-        for i in n3..n {
-            let row = r.ptr[i]..r.ptr[i + 1];
-            for k in row.clone() {
-                pos[r.col[k] as usize] = k;
-            }
-            for k in row.clone() {
-                let c = r.col[k] as usize;
-                if c >= i {
-                    break;
-                }
-                if c < n3 {
-                    let (s, d) = (c / 3, c % 3);
-                    let l = rv[k] / pv[pd[s]];
-                    rv[k] = l;
-                    for kk in pd[s] + 1..p.ptr[s + 1] {
-                        let q = pos[3 * p.col[kk] as usize + d];
-                        if q != usize::MAX {
-                            rv[q] -= l * pv[kk];
-                        }
-                    }
-                    for kk in r.ptr[c]..r.ptr[c + 1] {
-                        let q = pos[r.col[kk] as usize];
-                        if q != usize::MAX {
-                            rv[q] -= l * rv[kk];
-                        }
-                    }
-                } else {
-                    let l = rv[k] / rv[rd[c - n3]];
-                    rv[k] = l;
-                    for kk in rd[c - n3] + 1..r.ptr[c + 1] {
-                        let q = pos[r.col[kk] as usize];
-                        if q != usize::MAX {
-                            rv[q] -= l * rv[kk];
-                        }
-                    }
-                }
-            }
-            for k in row {
-                pos[r.col[k] as usize] = usize::MAX;
-            }
-            let dv = rv[rd[i - n3]];
-            if dv == 0.0 || !dv.is_finite() {
-                return Err(SolveError::ZeroPivot { row: i });
-            }
-        }
-        let pick =
-            |t: &Triangle, v: &[f64], rows: &dyn Fn(usize) -> std::ops::Range<usize>, nr: usize| {
-                let mut out = Triangle {
-                    ptr: vec![0],
-                    col: Vec::new(),
-                    val: Vec::new(),
-                };
-                for i in 0..nr {
-                    for k in rows(i) {
-                        out.col.push(t.col[k]);
-                        out.val.push(v[k]);
-                    }
-                    out.ptr.push(out.col.len());
-                }
-                out
-            };
-        let tail_l = |i: usize| if i < n3 { 0..0 } else { r.ptr[i]..rd[i - n3] };
-        let tail_u = |i: usize| {
-            if i < n3 {
-                r.ptr[i]..r.ptr[i + 1]
-            } else {
-                rd[i - n3] + 1..r.ptr[i + 1]
-            }
-        };
-        Ok(TripledIlu {
-            n,
-            np,
-            halves: m.halves,
-            lp: pick(p, &pv, &|s| p.ptr[s]..pd[s], np),
-            up: pick(p, &pv, &|s| pd[s] + 1..p.ptr[s + 1], np),
-            dp: pd.iter().map(|&k| pv[k]).collect(),
-            lt: pick(r, &rv, &tail_l, n),
-            ut: pick(r, &rv, &tail_u, n),
-            dt: rd.iter().map(|&k| rv[k]).collect(),
-        })
-    }
-}
-
-/// Forward substitution over P's rows `rows` (unit L), writing `z`, whose
-/// element 0 is slot `off`'s component x: every column of these rows is
-/// at or after `off`.
-fn forward(lp: &Triangle, r: &[f64], z: &mut [f64], off: usize, rows: std::ops::Range<usize>) {
-    for s in rows {
-        let mut acc = [r[3 * s], r[3 * s + 1], r[3 * s + 2]];
-        for k in lp.ptr[s]..lp.ptr[s + 1] {
-            let c = 3 * (lp.col[k] as usize - off);
-            let v = lp.val[k];
-            acc[0] -= v * z[c];
-            acc[1] -= v * z[c + 1];
-            acc[2] -= v * z[c + 2];
-        }
-        let o = 3 * (s - off);
-        z[o..o + 3].copy_from_slice(&acc);
-    }
-}
-
-impl TripledIlu {
-    /// Back substitution over P's rows `off..end` (descending): `own`
-    /// holds slots `off..end`, `far` everything from slot `far_from` on
-    /// (the separator and the other rows, already solved). A column of
-    /// these rows is either in `off..end` or at or after `far_from`.
-    fn backward(&self, own: &mut [f64], off: usize, end: usize, far: &[f64], far_from: usize) {
-        let (up, ut) = (&self.up, &self.ut);
-        let f0 = 3 * far_from;
-        for s in (off..end).rev() {
-            let o = 3 * (s - off);
-            let mut acc = [own[o], own[o + 1], own[o + 2]];
-            for k in up.ptr[s]..up.ptr[s + 1] {
-                let c = up.col[k] as usize;
-                let v = up.val[k];
-                let x = if c < end {
-                    &own[3 * (c - off)..3 * (c - off) + 3]
-                } else {
-                    &far[3 * c - f0..3 * c - f0 + 3]
-                };
-                acc[0] -= v * x[0];
-                acc[1] -= v * x[1];
-                acc[2] -= v * x[2];
-            }
-            for (d, a) in acc.iter_mut().enumerate() {
-                let i = 3 * s + d;
-                for k in ut.ptr[i]..ut.ptr[i + 1] {
-                    *a -= ut.val[k] * far[ut.col[k] as usize - f0];
-                }
-                *a /= self.dp[s];
-            }
-            own[o..o + 3].copy_from_slice(&acc);
-        }
-    }
-}
-
-impl Preconditioner for TripledIlu {
-    fn apply(&self, r: &[f64], z: &mut [f64]) {
-        let (n, np, n3) = (self.n, self.np, 3 * self.np);
-        let [a, b] = self.halves;
-        let (lt, ut) = (&self.lt, &self.ut);
-        // L y = r (unit lower): the halves in parallel, then the separator
-        {
-            let (za, zb) = z[..3 * b].split_at_mut(3 * a);
-            rayon::join(
-                || forward(&self.lp, r, za, 0, 0..a),
-                || forward(&self.lp, r, zb, a, a..b),
-            );
-        }
-        forward(&self.lp, r, z, 0, b..np);
-        for i in n3..n {
-            let mut acc = r[i];
-            for k in lt.ptr[i]..lt.ptr[i + 1] {
-                acc -= lt.val[k] * z[lt.col[k] as usize];
-            }
-            z[i] = acc;
-        }
-        // U z = y: the other rows, the separator, then the halves in parallel
-        for i in (n3..n).rev() {
-            let mut acc = z[i];
-            for k in ut.ptr[i]..ut.ptr[i + 1] {
-                acc -= ut.val[k] * z[ut.col[k] as usize];
-            }
-            z[i] = acc / self.dt[i - n3];
-        }
-        {
-            let (zs, tail) = z[3 * b..].split_at_mut(3 * (np - b));
-            self.backward(zs, b, np, tail, np);
-        }
-        let (zab, far) = z.split_at_mut(3 * b);
-        let (za, zb) = zab.split_at_mut(3 * a);
-        rayon::join(
-            || self.backward(za, 0, a, far, b),
-            || self.backward(zb, a, b, far, b),
-        );
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::linsolve::{bicgstab, BicgstabParams, Ilu0};
+    use crate::linsolve::{Preconditioner, TripledIlu};
     use faer::sparse::Triplet;
 
     /// A particle block I₃ ⊗ P (P a non-symmetric ring Laplacian with mass)
@@ -761,6 +434,36 @@ mod tests {
         assert!(tr.with_halves([40, 80]).is_err());
         let tr = Tripled::from_csr(&a, 90).unwrap();
         assert!(tr.with_halves([45, 75]).is_err());
+    }
+
+    #[test]
+    fn face_and_cell_rows_worked_in_parallel_chunks_give_the_general_format_bit_for_bit() {
+        // 550 rows after the particles: several chunks of the parallel
+        // elimination and forward sweep of their particle columns
+        let halves = [40, 75];
+        let (n, t) = coupled_in(90, 400, 150, halves);
+        let m = faer::sparse::SparseRowMat::try_new_from_triplets(n, n, &t).unwrap();
+        let a = Csr::from_faer(m.as_ref()).unwrap();
+        let ilu = Ilu0::new(&a).unwrap();
+        let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.53).sin()).collect();
+        let mut z1 = vec![0.0; n];
+        ilu.apply(&x, &mut z1);
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut z2 = vec![0.0; n];
+            pool.install(|| {
+                let tr = Tripled::from_csr(&a, 90)
+                    .unwrap()
+                    .with_halves(halves)
+                    .unwrap();
+                let tilu = TripledIlu::from_tripled(&tr).unwrap();
+                tilu.apply(&x, &mut z2);
+            });
+            assert_eq!(z1, z2, "{threads} threads");
+        }
     }
 
     #[test]
