@@ -251,7 +251,34 @@ pub fn solve(
     info.counts = surf.counts;
     info.fits = surf.fits;
     let t = Instant::now();
-    let full = Poisson::build(grid, solids, |_, _| false);
+    let sheets = &surf.nb.x[..surf.n_sheet()];
+    // the grid's system and K, and beside them the particles' order in the
+    // coupled system (it needs only the Laplacian's pattern)
+    let ((full, constrained, released), order) = {
+        let (grid, parts) = (&*grid, &*parts);
+        rayon::join(
+            || {
+                let full = Poisson::build(grid, solids, |_, _| false);
+                // K after the pre-solve release, with the face masses of
+                // eq. (19) (per face, so releasing more faces later leaves
+                // the others' as they are)
+                let mut constrained = faces::constraints(grid, &full, sheets);
+                let released = constrained.release_enclosed(grid, &full, sheets);
+                if prm.face_mass == FaceMass::Sheet {
+                    if let Some(s) = volume_spacing(parts, prm.surface.density) {
+                        constrained.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
+                    }
+                }
+                (full, constrained, released)
+            },
+            || {
+                (prm.ilu_order == IluOrder::ParticlesFirst)
+                    .then(|| system::particle_order(&surf))
+                    .transpose()
+            },
+        )
+    };
+    let porder = order.map_err(solve_err("coupled system order"))?;
     info.cells = full.cells.len();
     info.theta_clamps = full.theta_clamps;
     let sc = Scalars {
@@ -261,16 +288,6 @@ pub fn solve(
         density: prm.surface.density,
         dx: grid.dx,
     };
-    let sheets = &surf.nb.x[..surf.n_sheet()];
-    // K after the pre-solve release, with the face masses of eq. (19)
-    // (per face, so releasing more faces later leaves the others' as they are)
-    let mut constrained = faces::constraints(grid, &full, sheets);
-    let released = constrained.release_enclosed(grid, &full, sheets);
-    if prm.face_mass == FaceMass::Sheet {
-        if let Some(s) = volume_spacing(parts, prm.surface.density) {
-            constrained.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
-        }
-    }
     // the velocity jump no substep makes physically (release::outlier_bound)
     let v_ref = grid
         .u
@@ -329,6 +346,7 @@ pub fn solve(
                 &mut info,
                 t,
                 warm.as_ref(),
+                porder.as_ref(),
             ) {
                 Ok(r) => {
                     attempt = Some(r);
@@ -513,6 +531,7 @@ fn solve_form(
     info: &mut CouplingInfo,
     t: Instant,
     warm: Option<&WarmStart>,
+    order: Option<&system::ParticleOrder>,
 ) -> Result<(system::Assembled, Vec<Real>, WarmStart), CouplingError> {
     let reduced = (form == Form::Reduced)
         .then(|| Poisson::build(grid, solids, |a, s| k.index(a, s).is_some()));
@@ -527,6 +546,7 @@ fn solve_form(
         prm.ilu_order,
         prm.face_fill,
         prm.shared_block,
+        order,
     )
     .map_err(solve_err("coupled system assembly"))?;
     let view = match &sys.matrix {

@@ -153,6 +153,37 @@ fn pressure_block(sys: &Poisson, qo: usize, t: &mut Vec<Triplet<usize, usize, Re
     }
 }
 
+/// The particles' slots in the particles-first order of eq. (24): reverse
+/// Cuthill–McKee of the MLS Laplacian's pattern, then its two halves apart
+/// and their separator last ([`split_halves`]), so that the shared format's
+/// triangular solves work the halves in parallel. It depends only on the
+/// pattern (the same in both formats and for any thread count), so
+/// [`crate::coupling::solve`] computes it once per substep, beside the grid
+/// work that does not need it.
+#[derive(Clone, Debug)]
+pub struct ParticleOrder {
+    /// Slot of each particle (joint index → slot).
+    pub slot: Vec<usize>,
+    /// Slots `..halves[0]` and `halves[0]..halves[1]` share no entry of P.
+    pub halves: [usize; 2],
+}
+
+/// [`ParticleOrder`] of the sheet and filament particles of `surf`.
+pub fn particle_order(surf: &Surface) -> Result<ParticleOrder, SolveError> {
+    let np = surf.len();
+    let l = Csr::from_faer(surf.laplacian.as_ref())?;
+    let rcm = reverse_cuthill_mckee(np, l.row_ptr, l.col);
+    let (order, a, b) = split_halves(np, l.row_ptr, l.col, &rcm);
+    let mut slot = vec![0; np];
+    for (s, &i) in order.iter().enumerate() {
+        slot[i] = s;
+    }
+    Ok(ParticleOrder {
+        slot,
+        halves: [a, b],
+    })
+}
+
 /// (cell, s_{c,f}) of the liquid cells next to constraint face f.
 fn face_cells(k: &Constraints, f: usize) -> impl Iterator<Item = (usize, Real)> + '_ {
     let s = k.sides[f];
@@ -197,6 +228,7 @@ pub fn assemble(
     order: IluOrder,
     face_fill: bool,
     shared: bool,
+    given: Option<&ParticleOrder>,
 ) -> Result<Assembled, SolveError> {
     let nq = sys.a.len();
     let np = surf.len();
@@ -209,20 +241,19 @@ pub fn assemble(
         Form::Reduced => (3 * np, 0, n),
     };
     let l = Csr::from_faer(surf.laplacian.as_ref())?;
-    // RCM, then its two halves apart and their separator last, so that the
-    // shared format's triangular solves work the halves in parallel (the
-    // order is the same in both formats and for any thread count)
-    let mut halves = [np, np];
-    let slot = reorder.then(|| {
-        let rcm = reverse_cuthill_mckee(np, l.row_ptr, l.col);
-        let (order, a, b) = split_halves(np, l.row_ptr, l.col, &rcm);
-        halves = [a, b];
-        let mut slot = vec![0; np];
-        for (s, &i) in order.iter().enumerate() {
-            slot[i] = s;
+    let (slot, halves) = match (reorder, given) {
+        (false, _) => (None, [np, np]),
+        (true, Some(o)) if o.slot.len() == np => (Some(o.slot.clone()), o.halves),
+        (true, Some(_)) => {
+            return Err(SolveError::Dimension(
+                "the particle order was computed for another particle set".into(),
+            ))
         }
-        slot
-    });
+        (true, None) => {
+            let o = particle_order(surf)?;
+            (Some(o.slot), o.halves)
+        }
+    };
     let ur = |i: usize, d: usize| uo + 3 * slot.as_ref().map_or(i, |s| s[i]) + d;
     let vol = sc.density * sc.dx.powi(3);
     let shared_p = shared && reorder;
@@ -437,6 +468,7 @@ pub(super) fn eq24_residual(
         IluOrder::Equation,
         false,
         false,
+        None,
     )
     .map_err(solve_err("eq. (24) residual"))?;
     let SystemMatrix::General(m) = &sys.matrix else {

@@ -79,8 +79,11 @@ pub fn bicgstab(
     }
     let mut r = vec![0.0; n];
     let mut tmp = vec![0.0; n];
-    true_residual(a, b, x, &mut tmp, &mut r);
+    // ‖r‖ of the current residual and ‖r0‖ of the shadow one, kept for the
+    // breakdown test (each is the norm of the vector as it stands)
+    let mut r_norm = true_residual(a, b, x, &mut tmp, &mut r);
     let mut r0 = r.clone();
+    let mut r0_norm = r_norm;
     let mut restarts = 0;
     let (mut rho, mut alpha, mut omega) = (1.0f64, 1.0f64, 1.0f64);
     let mut v = vec![0.0; n];
@@ -90,7 +93,7 @@ pub fn bicgstab(
     let mut sh = vec![0.0; n];
     let mut t = vec![0.0; n];
     let mut best = x.to_vec();
-    let mut best_res = norm(&r) / bn;
+    let mut best_res = r_norm / bn;
     if best_res <= prm.tol {
         return Ok(SolveInfo {
             iterations: 0,
@@ -99,7 +102,7 @@ pub fn bicgstab(
     }
     for it in 1..=prm.max_iter {
         let mut rho_new = dot(&r0, &r);
-        if rho_new.abs() <= 1e-30 * norm(&r0) * norm(&r) || !rho_new.is_finite() {
+        if rho_new.abs() <= 1e-30 * r0_norm * r_norm || !rho_new.is_finite() {
             // (near-)orthogonal shadow residual: restart from the current residual
             if restarts >= MAX_RESTARTS || !rho_new.is_finite() {
                 x.copy_from_slice(&best);
@@ -111,6 +114,7 @@ pub fn bicgstab(
             }
             restarts += 1;
             r0.copy_from_slice(&r);
+            r0_norm = r_norm;
             p.iter_mut().for_each(|e| *e = 0.0);
             v.iter_mut().for_each(|e| *e = 0.0);
             rho = 1.0;
@@ -143,7 +147,8 @@ pub fn bicgstab(
             .zip(ph.par_iter())
             .with_min_len(1024)
             .for_each(|(xi, pi)| *xi += alpha * pi);
-        let sn = norm(&s) / bn;
+        let s_norm = norm(&s);
+        let sn = s_norm / bn;
         if sn <= prm.tol {
             let res = true_residual(a, b, x, &mut tmp, &mut r) / bn;
             if res <= prm.tol * 10.0 {
@@ -153,6 +158,7 @@ pub fn bicgstab(
                 });
             }
             r.copy_from_slice(&s);
+            r_norm = s_norm;
             continue;
         }
         m.apply(&s, &mut sh);
@@ -180,7 +186,8 @@ pub fn bicgstab(
             .with_min_len(1024)
             .for_each(|(xi, si)| *xi += omega * si);
         axpy_into(&mut r, &s, -omega, &t);
-        let rn = norm(&r) / bn;
+        r_norm = norm(&r);
+        let rn = r_norm / bn;
         if !rn.is_finite() {
             x.copy_from_slice(&best);
             return Err(SolveError::NonFinite("iterate"));
@@ -190,8 +197,10 @@ pub fn bicgstab(
             best.copy_from_slice(x);
         }
         if rn <= prm.tol {
-            // confirm with the true residual (the recursive one drifts)
-            let res = true_residual(a, b, x, &mut tmp, &mut r) / bn;
+            // confirm with the true residual (the recursive one drifts),
+            // which goes on as r if it is not small enough
+            r_norm = true_residual(a, b, x, &mut tmp, &mut r);
+            let res = r_norm / bn;
             if res <= prm.tol * 10.0 {
                 return Ok(SolveInfo {
                     iterations: it,

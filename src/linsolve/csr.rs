@@ -101,14 +101,26 @@ pub fn rows_from_triplets(
         buf[fill[e.row]] = (e.col, e.val);
         fill[e.row] += 1;
     }
+    // each row sorted by column (in parallel; stable: duplicates keep their
+    // order in `t`)
+    {
+        let mut rows: Vec<&mut [(usize, f64)]> = Vec::with_capacity(nrows);
+        let mut left = &mut buf[..];
+        for i in 0..nrows {
+            let (row, rest) = std::mem::take(&mut left).split_at_mut(start[i + 1] - start[i]);
+            rows.push(row);
+            left = rest;
+        }
+        rows.par_iter_mut()
+            .with_min_len(256)
+            .for_each(|row| row.sort_by_key(|e| e.0));
+    }
     let mut row_ptr = Vec::with_capacity(nrows + 1);
     let mut col = Vec::with_capacity(t.len());
     let mut val = Vec::with_capacity(t.len());
     row_ptr.push(0);
     for i in 0..nrows {
-        let row = &mut buf[start[i]..start[i + 1]];
-        // stable: duplicates keep their order in `t`
-        row.sort_by_key(|e| e.0);
+        let row = &buf[start[i]..start[i + 1]];
         let first = col.len();
         for &(c, v) in row.iter() {
             if col.len() > first && col[col.len() - 1] == c {
