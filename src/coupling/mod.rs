@@ -21,6 +21,7 @@
 pub mod band;
 pub mod codim;
 pub mod faces;
+pub mod params;
 pub mod release;
 pub mod reseed;
 pub mod surface;
@@ -28,202 +29,22 @@ pub mod system;
 pub mod warm;
 
 use crate::grid::extrapolate::{constrain_solids, extrapolate};
-use crate::grid::pcg::{NotFinite, PcgParams};
 use crate::grid::projection::{project_liquid, Poisson};
 use crate::grid::MacGrid;
-use crate::linsolve::{
-    bicgstab, BicgstabParams, Csr, Ilu0, Operator, Preconditioner, SolveError, TripledIlu,
-};
+use crate::linsolve::{bicgstab, Csr, Ilu0, Operator, Preconditioner, SolveError, TripledIlu};
 use crate::math::{Real, Vec3};
-use crate::mls::{FitStats, MlsError};
 use crate::particles::Particles;
 use crate::solids::SolidSet;
 use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 pub use band::{band_correction, BAND_PROBE};
-use serde::{Deserialize, Serialize};
+pub use params::{
+    BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Method, MAX_OUTLIER_ROUNDS,
+};
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
 pub use system::IluOrder;
 use system::{assemble, eq24_residual, Form, Scalars, SystemMatrix};
 pub use warm::WarmStart;
-
-/// How the coupled system is solved.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum Method {
-    /// eq. (24) as one system [p, u₁, u₂, λ] (the paper).
-    #[default]
-    Monolithic,
-    /// λ eliminated: [u₁, u₂, p].
-    Schur,
-}
-
-/// Which liquid fraction gives a constraint face its mass (eq. 19's M₍₀₎
-/// on the faces the sheet drives).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum FaceMass {
-    /// The liquid ends at the sheet layer: the fraction below a level set
-    /// half a particle spacing outside the outermost volume particles.
-    #[default]
-    Sheet,
-    /// The ghost-fluid fraction of the pressure solve's level set, which
-    /// reaches `surface_radius` Δx past the volume particles.
-    LevelSet,
-}
-
-/// Which velocity a constraint face is held to (eq. 18's K v = K J u).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum BandVelocity {
-    /// (J u)_f: the sheet velocity interpolated onto the face, whatever the
-    /// face's distance from the sheet.
-    Sheet,
-    /// (J u)_f plus the change of the liquid's velocity along the sheet
-    /// normal from each sheet particle to the face, read from the liquid
-    /// below the band one substep earlier ([`band_correction`]).
-    #[default]
-    Extrapolated,
-}
-
-/// Parameters of the coupled solve.
-#[derive(Clone, Debug)]
-pub struct CouplingParams {
-    /// Which system to solve.
-    pub method: Method,
-    /// BiCGSTAB stopping rule (paper: 1e-9 relative).
-    pub solver: BicgstabParams,
-    /// Order of the monolithic system's unknowns for ILU(0).
-    pub ilu_order: IluOrder,
-    /// Keep the λ–λ fill of the particle rows in ILU(0)'s pattern.
-    pub face_fill: bool,
-    /// Store the monolithic system's particle block once for the three
-    /// velocity components ([`crate::linsolve::Tripled`]; same results).
-    pub shared_block: bool,
-    /// Particle side.
-    pub surface: SurfaceParams,
-    /// Pressure PCG rule, used when there are no constraint faces.
-    pub pressure: PcgParams,
-    /// Codimension transitions after each advection (§8); `None` keeps
-    /// every particle's codimension.
-    pub transitions: Option<crate::transition::TransitionParams>,
-    /// Reseeding of the sheets and filaments after the transitions (§9);
-    /// `None` leaves the particle set alone.
-    pub reseed: Option<crate::reseed::ReseedParams>,
-    /// Jet nozzles, where transitions and reseeding are suspended ([`codim::Source`]).
-    pub sources: Vec<codim::Source>,
-    /// Mass of the constraint faces.
-    pub face_mass: FaceMass,
-    /// Velocity the constraint faces are held to.
-    pub band: BandVelocity,
-    /// Level-set radius of the volume particles (× Δx), `solver.surface_radius`.
-    pub surface_radius: Real,
-    /// Also evaluate the residual of the full eq. (24) for the solution
-    /// (assembles the monolithic matrix when the Schur method ran).
-    pub verify: bool,
-}
-
-/// What a coupled solve did.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct CouplingInfo {
-    /// Liquid cells (pressure unknowns).
-    pub cells: usize,
-    /// Sheet + filament particles.
-    pub particles: usize,
-    /// Constraint faces (λ unknowns of eq. 24).
-    pub faces: usize,
-    /// Unknowns of the system solved.
-    pub unknowns: usize,
-    /// Non-zeros of its matrix.
-    pub nonzeros: usize,
-    /// BiCGSTAB iterations.
-    pub iterations: usize,
-    /// True relative residual of the solved system.
-    pub rel_residual: Real,
-    /// Relative residual of eq. (24) itself (when verified).
-    pub eq24_residual: Option<Real>,
-    /// Particle side: areas, forces, Laplacian (s).
-    pub operators_s: Real,
-    /// Assembly of the system (s).
-    pub assemble_s: Real,
-    /// ILU(0) factorisation (s).
-    pub factor_s: Real,
-    /// BiCGSTAB (s).
-    pub solve_s: Real,
-    /// Ghost-fluid θ clamps.
-    pub theta_clamps: usize,
-    /// Unknowns seeded from the previous substep's solution (0: cold start,
-    /// or the seeded guess had the larger residual).
-    pub warm_seeded: usize,
-    /// Solves that failed with the chosen method and were redone with the
-    /// other one (a counted fallback).
-    pub method_fallbacks: usize,
-    /// Constraint faces released around interior liquid cells they enclosed
-    /// ([`faces::Constraints::release_enclosed`]).
-    pub released_faces: usize,
-    /// Solves redone after outlier velocities, with the constraint faces
-    /// of the enclosed cells around them released
-    /// ([`release::outlier_cells`]; at most [`MAX_OUTLIER_ROUNDS`]), plus
-    /// the one redone after both methods failed, with the weakly pinned
-    /// cells released ([`faces::Constraints::release_weak`]).
-    pub outlier_rounds: usize,
-    /// Why the chosen method failed, when it did.
-    #[serde(skip)]
-    pub first_failure: Option<String>,
-    /// Mean pressure (Pa) of the liquid cells deeper than Δx below the
-    /// surface (0 if none): the Young–Laplace jump of a droplet at rest.
-    pub interior_pressure: Real,
-    /// Particle classification.
-    pub counts: SurfaceCounts,
-    /// MLS fits.
-    pub fits: FitStats,
-}
-
-/// Why a coupled solve failed.
-#[derive(Debug, thiserror::Error)]
-pub enum CouplingError {
-    /// The MLS operators could not be built.
-    #[error("MLS operators of the sheet/filament particles: {0}")]
-    Mls(#[from] MlsError),
-    /// A linear solve failed.
-    #[error("{stage}: {source}")]
-    Solve {
-        /// Which solve.
-        stage: &'static str,
-        /// Why.
-        source: SolveError,
-    },
-    /// The chosen method failed and so did the other one.
-    #[error("{first}; the other method failed too: {second}")]
-    BothFailed {
-        /// Why the chosen method failed.
-        first: String,
-        /// Why the other one failed.
-        second: Box<CouplingError>,
-    },
-    /// The solution still jumps by more than the substep's physical
-    /// velocity scale allows ([`release::outlier_bound`]) after the
-    /// enclosed cells around the outliers lost their constraint faces.
-    #[error(
-        "coupled solve: velocity jump beyond {bound:.3} m/s at ({:.4}, {:.4}, {:.4}) m after {rounds} rounds of releasing constraint faces",
-        at[0], at[1], at[2]
-    )]
-    Outlier {
-        /// Centre of the first outlier cell (m).
-        at: Vec3,
-        /// The bound (m/s).
-        bound: Real,
-        /// Rounds of releases done.
-        rounds: usize,
-    },
-    /// The uncoupled pressure solve failed.
-    #[error("pressure projection: {0}")]
-    Pressure(NotFinite),
-}
-
-/// Solves redone after outliers before a substep fails
-/// ([`CouplingError::Outlier`]).
-pub const MAX_OUTLIER_ROUNDS: usize = 3;
 
 fn solve_err(stage: &'static str) -> impl Fn(SolveError) -> CouplingError {
     move |source| CouplingError::Solve { stage, source }

@@ -6,7 +6,7 @@
 //!
 //! faer supplies the sparse matrix type (`SparseRowMat<usize, f64>`) but no
 //! incomplete factorisation, so ILU(0) is written here ([`ilu0`]); the
-//! Krylov loop is [`bicgstab`]. Matrix–vector products are parallel over
+//! Krylov loop is [`bicgstab()`]. Matrix–vector products are parallel over
 //! rows; dot products are summed over fixed-size chunks in a fixed order, so
 //! results are bit-identical for any thread count.
 
