@@ -46,12 +46,15 @@ pub struct Tripled {
 /// Splits each particle's three rows of `(col, val, rows)` into the shared
 /// particle part (columns < 3·np, returned for component 0 as particle
 /// slots) and the rest. `None` when the three rows differ in their particle
-/// part or a particle entry couples two components.
+/// part or a particle entry couples two components. Only the tests convert
+/// a general matrix (the assembly builds the shared form directly).
+#[cfg(test)]
 struct Split {
     shared: Triangle,
     rest: Triangle,
 }
 
+#[cfg(test)]
 fn split(
     np: usize,
     n: usize,
@@ -142,7 +145,9 @@ fn shared_row(t: &Triangle, s: usize, x: &[f64], mut acc: [f64; 3], sub: bool) -
 impl Tripled {
     /// The shared form of `a` whose first 3·`np` rows and columns are `np`
     /// particles' components; `None` when `a` does not have that structure
-    /// (then the general format serves).
+    /// (then the general format serves). The tests' reference for the
+    /// assembly's shared form.
+    #[cfg(test)]
     pub fn from_csr(a: &Csr, np: usize) -> Option<Tripled> {
         let n = a.nrows;
         if a.ncols != n || 3 * np > n || n > u32::MAX as usize {

@@ -13,7 +13,7 @@
 
 use super::ilu0::Triangle;
 use super::tripled::Tripled;
-use super::{Csr, Preconditioner, SolveError};
+use super::{Preconditioner, SolveError};
 use rayon::prelude::*;
 
 /// Chunks of the rows `n3..n` for the parallel work on them: boundaries
@@ -118,8 +118,9 @@ fn eliminate(
 
 impl TripledIlu {
     /// Factorises `a` and stores it shared; `Ok(None)` when `a` does not
-    /// have the structure (see [`Tripled::from_csr`]).
-    pub fn new(a: &Csr, np: usize) -> Result<Option<TripledIlu>, SolveError> {
+    /// have the structure (see `Tripled::from_csr`; tests only).
+    #[cfg(test)]
+    pub fn new(a: &super::Csr, np: usize) -> Result<Option<TripledIlu>, SolveError> {
         match Tripled::from_csr(a, np) {
             Some(m) => TripledIlu::from_tripled(&m).map(Some),
             None => Ok(None),
