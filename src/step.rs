@@ -177,6 +177,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
         ilu_order: s.coupling.ordering,
         face_fill: s.coupling.face_fill,
         shared_block: s.coupling.shared_block,
+        tail_fill: s.coupling.tail_fill,
         solver: BicgstabParams {
             tol: s.coupling.tolerance,
             max_iter: s.coupling.max_iterations as usize,

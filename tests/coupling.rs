@@ -378,3 +378,38 @@ fn a_failing_coupled_solve_halves_the_substep_then_stops_cleanly() {
     assert!(msg.contains("did not converge"), "{msg}");
     assert!(!sim.dir.join("particles.0001.ply").exists());
 }
+
+/// One level of fill in the impulse and pressure rows of the incomplete
+/// factorisation (`coupling.tail_fill`, the default) changes the
+/// preconditioner only: the droplet's solves reach the same tolerance, the
+/// same pressures and velocities, in fewer BiCGSTAB iterations than ILU(0)
+/// (the fill restores the pattern of J P⁻¹ Jᵀ that ILU(0) drops).
+#[test]
+fn the_tail_fill_solves_the_same_system_in_fewer_iterations() {
+    let mut runs = Vec::new();
+    for fill in [false, true] {
+        let (mut st, mut prm) = droplet(4.0, Method::Monolithic);
+        prm.coupling.as_mut().unwrap().tail_fill = fill;
+        let mut its = 0;
+        let mut last = None;
+        for _ in 0..3 {
+            let info = step(&mut st, &prm, 0.003, &mut StageTimes::default()).unwrap();
+            let c = info.coupling.unwrap();
+            assert!(c.eq24_residual.unwrap() <= 1e-8, "{fill}: {c:?}");
+            assert_eq!(c.method_fallbacks, 0, "{fill}");
+            its += c.iterations;
+            last = Some(c);
+        }
+        runs.push((st, last.unwrap(), its));
+    }
+    let ((st0, c0, its0), (st1, c1, its1)) = (&runs[0], &runs[1]);
+    println!("ILU(0): {its0} iterations, with the tail fill: {its1}");
+    let dp = (c1.interior_pressure - c0.interior_pressure).abs();
+    assert!(dp < 1e-6 * c0.interior_pressure, "{dp}");
+    assert_same_velocities(&st0.particles, &st1.particles);
+    assert_eq!(c0.unknowns, c1.unknowns);
+    assert!(
+        (*its1 as f64) < 0.75 * *its0 as f64,
+        "{its1} iterations with the fill against {its0}"
+    );
+}

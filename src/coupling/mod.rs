@@ -389,10 +389,23 @@ fn solve_form(
     info.assemble_s += t.elapsed().as_secs_f64();
     let t = Instant::now();
     let ilu: Box<dyn Preconditioner> = match &view {
-        View::Shared(m) => {
-            Box::new(TripledIlu::from_tripled(m).map_err(solve_err("coupled system ILU(0)"))?)
+        View::Shared(m) => Box::new(
+            TripledIlu::from_tripled(m, prm.tail_fill).map_err(solve_err("coupled system ILU"))?,
+        ),
+        View::General(a) => {
+            // the trailing λ and pressure rows of the particles-first order
+            let fill = prm.tail_fill
+                && form == Form::Monolithic
+                && prm.ilu_order == IluOrder::ParticlesFirst;
+            Box::new(
+                if fill {
+                    Ilu0::with_tail_fill(a, sys.mo)
+                } else {
+                    Ilu0::new(a)
+                }
+                .map_err(solve_err("coupled system ILU"))?,
+            )
         }
-        View::General(a) => Box::new(Ilu0::new(a).map_err(solve_err("coupled system ILU(0)"))?),
     };
     info.factor_s += t.elapsed().as_secs_f64();
     let t = Instant::now();

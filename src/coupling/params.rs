@@ -63,6 +63,10 @@ pub struct CouplingParams {
     /// Store the monolithic system's particle block once for the three
     /// velocity components ([`crate::linsolve::Tripled`]; same results).
     pub shared_block: bool,
+    /// One level of fill in the λ and pressure rows of the monolithic
+    /// system's incomplete factorisation (particles-first order only;
+    /// [`crate::linsolve::Ilu0::with_tail_fill`]).
+    pub tail_fill: bool,
     /// Particle side.
     pub surface: SurfaceParams,
     /// Pressure PCG rule, used when there are no constraint faces.

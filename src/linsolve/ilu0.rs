@@ -169,6 +169,24 @@ impl Ilu0 {
             diag: diag.iter().map(|&k| val[k]).collect(),
         })
     }
+
+    /// ILU(0) of `a` on its pattern extended by one level of fill in the
+    /// rows and columns from `from` on ([`super::fill`]): the coupled
+    /// system's impulse and pressure rows. `from ≥ n` is [`Ilu0::new`].
+    pub fn with_tail_fill(a: &Csr, from: usize) -> Result<Ilu0, SolveError> {
+        if a.ncols != a.nrows || from >= a.nrows {
+            return Ilu0::new(a);
+        }
+        let (row_ptr, col, val) =
+            super::fill::with_tail_fill(a.row_ptr, a.col, a.val, from, |c| c, |c| c);
+        Ilu0::new(&Csr {
+            nrows: a.nrows,
+            ncols: a.ncols,
+            row_ptr: &row_ptr,
+            col: &col,
+            val: &val,
+        })
+    }
 }
 
 impl Preconditioner for Ilu0 {

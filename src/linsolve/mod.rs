@@ -12,6 +12,7 @@
 
 pub mod bicgstab;
 pub mod csr;
+mod fill;
 pub mod ilu0;
 pub mod order;
 pub mod tripled;

@@ -419,7 +419,7 @@ mod tests {
             .unwrap()
             .with_halves(halves)
             .unwrap();
-        let tilu = TripledIlu::from_tripled(&tr).unwrap();
+        let tilu = TripledIlu::from_tripled(&tr, false).unwrap();
         let ilu = Ilu0::new(&a).unwrap();
         let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.31).cos()).collect();
         let (mut z1, mut z2) = (vec![0.0; n], vec![0.0; n]);
@@ -443,17 +443,34 @@ mod tests {
 
     #[test]
     fn face_and_cell_rows_worked_in_parallel_chunks_give_the_general_format_bit_for_bit() {
+        // (with and without the tail fill)
+        face_and_cell_rows_bit_for_bit();
+    }
+
+    fn face_and_cell_rows_bit_for_bit() {
         // 550 rows after the particles: several chunks of the parallel
         // elimination and forward sweep of their particle columns
         let halves = [40, 75];
         let (n, t) = coupled_in(90, 400, 150, halves);
         let m = faer::sparse::SparseRowMat::try_new_from_triplets(n, n, &t).unwrap();
         let a = Csr::from_faer(m.as_ref()).unwrap();
-        let ilu = Ilu0::new(&a).unwrap();
         let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.53).sin()).collect();
-        let mut z1 = vec![0.0; n];
-        ilu.apply(&x, &mut z1);
-        for threads in [1, 2, 3] {
+        for (fill, threads) in [
+            (false, 1),
+            (false, 2),
+            (false, 3),
+            (true, 1),
+            (true, 2),
+            (true, 3),
+        ] {
+            // with the tail fill too: the λ and pressure rows' extended pattern
+            let ilu = if fill {
+                Ilu0::with_tail_fill(&a, 3 * 90).unwrap()
+            } else {
+                Ilu0::new(&a).unwrap()
+            };
+            let mut z1 = vec![0.0; n];
+            ilu.apply(&x, &mut z1);
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
@@ -464,10 +481,10 @@ mod tests {
                     .unwrap()
                     .with_halves(halves)
                     .unwrap();
-                let tilu = TripledIlu::from_tripled(&tr).unwrap();
+                let tilu = TripledIlu::from_tripled(&tr, fill).unwrap();
                 tilu.apply(&x, &mut z2);
             });
-            assert_eq!(z1, z2, "{threads} threads");
+            assert_eq!(z1, z2, "{threads} threads, tail fill {fill}");
         }
     }
 

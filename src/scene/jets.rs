@@ -100,6 +100,11 @@ pub struct CouplingSettings {
     /// results are the same bit for bit; shared is faster.
     #[serde(default = "default_shared_block")]
     pub shared_block: bool,
+    /// Factorise the monolithic system with one level of fill in its
+    /// impulse and pressure rows, among their own columns (`false`: ILU(0)
+    /// on A's pattern). Same system and tolerance; far fewer iterations.
+    #[serde(default = "default_tail_fill")]
+    pub tail_fill: bool,
 }
 
 /// `coupling.band`.
@@ -118,6 +123,10 @@ fn default_face_fill() -> bool {
 }
 
 fn default_shared_block() -> bool {
+    true
+}
+
+fn default_tail_fill() -> bool {
     true
 }
 
@@ -143,6 +152,7 @@ impl Default for CouplingSettings {
             ordering: crate::coupling::IluOrder::default(),
             face_fill: default_face_fill(),
             shared_block: default_shared_block(),
+            tail_fill: default_tail_fill(),
         }
     }
 }

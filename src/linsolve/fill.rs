@@ -1,0 +1,135 @@
+//! One level of fill for the incomplete factorisation of eq. (24) in its
+//! trailing rows: the impulse (λ) and pressure rows of the particles-first
+//! order [u, λ, q].
+//!
+//! ILU(0) keeps the pattern of A. Eliminating the particle columns of a λ
+//! row, then its λ columns, creates entries among the λ and pressure
+//! columns that A does not store: the pattern of the Schur complement
+//! J P⁻¹ Jᵀ and of the pressure–impulse coupling it feeds. Dropping them
+//! is what makes ILU(0) weak on the coupled system (150 BiCGSTAB
+//! iterations on a fluid-chain substep, 23 with them kept;
+//! `docs/decisions.md`, "Level-1 fill in the impulse and pressure rows").
+//! Here the pattern of rows ≥ `from` is extended, in columns ≥ `from`
+//! only, by the fill of level 1 (Saad, *Iterative Methods for Sparse
+//! Linear Systems*, §10.3.3): column c joins row i when some j < i of row
+//! i's pattern has c > j in its own row. The particle rows keep their
+//! pattern, so their block is still shared by the three components
+//! ([`super::TripledIlu`]). The added entries are stored as zeros; the
+//! numeric factorisation is ILU(0)'s on the extended pattern.
+
+use rayon::prelude::*;
+
+/// Rows in the compressed pattern `ptr`/`col` (columns sorted per row,
+/// `at(k)` the column of entry k) extended below row `from` as described
+/// in the module doc: the extended `ptr`, the extended columns (`make`
+/// builds one) and the values, where `val` is the original values and the
+/// added entries are 0. Rows before `from` are copied unchanged.
+pub(super) fn with_tail_fill<C: Copy + Send + Sync>(
+    ptr: &[usize],
+    col: &[C],
+    val: &[f64],
+    from: usize,
+    at: impl Fn(C) -> usize + Sync,
+    make: impl Fn(usize) -> C + Sync,
+) -> (Vec<usize>, Vec<C>, Vec<f64>) {
+    let n = ptr.len() - 1;
+    let from = from.min(n);
+    // the added columns of each row from `from` on, sorted
+    // (a marker per task, stamped with the row, so that each candidate is
+    // kept once without sorting them all)
+    let per = ((n - from) / (4 * rayon::current_num_threads()).max(1)).max(64);
+    let added: Vec<Vec<usize>> = (from..n)
+        .into_par_iter()
+        .with_min_len(per)
+        .map_init(
+            || vec![usize::MAX; n],
+            |mark, i| {
+                let row = ptr[i]..ptr[i + 1];
+                for k in row.clone() {
+                    mark[at(col[k])] = i;
+                }
+                let mut cand = Vec::new();
+                for k in row {
+                    let j = at(col[k]);
+                    if j >= i {
+                        break;
+                    }
+                    for kk in ptr[j]..ptr[j + 1] {
+                        let c = at(col[kk]);
+                        if c > j && c >= from && mark[c] != i {
+                            mark[c] = i;
+                            cand.push(c);
+                        }
+                    }
+                }
+                cand.sort_unstable();
+                cand
+            },
+        )
+        .collect();
+    let extra: usize = added.iter().map(Vec::len).sum();
+    let mut p = Vec::with_capacity(n + 1);
+    let mut c = Vec::with_capacity(col.len() + extra);
+    let mut v = Vec::with_capacity(val.len() + extra);
+    p.extend_from_slice(&ptr[..=from]);
+    c.extend_from_slice(&col[..ptr[from]]);
+    v.extend_from_slice(&val[..ptr[from]]);
+    for (i, add) in (from..n).zip(&added) {
+        let mut a = add.iter().peekable();
+        for k in ptr[i]..ptr[i + 1] {
+            let j = at(col[k]);
+            while let Some(&&x) = a.peek() {
+                if x > j {
+                    break;
+                }
+                c.push(make(x));
+                v.push(0.0);
+                a.next();
+            }
+            c.push(col[k]);
+            v.push(val[k]);
+        }
+        for &x in a {
+            c.push(make(x));
+            v.push(0.0);
+        }
+        p.push(c.len());
+    }
+    (p, c, v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows of a small matrix as (column, value) lists.
+    fn rows(p: &[usize], c: &[usize], v: &[f64]) -> Vec<Vec<(usize, f64)>> {
+        (0..p.len() - 1)
+            .map(|i| (p[i]..p[i + 1]).map(|k| (c[k], v[k])).collect())
+            .collect()
+    }
+
+    #[test]
+    fn level_one_fill_is_added_in_trailing_rows_and_columns_only() {
+        // 0: [0, 1, 2, 3]   1: [1, 3]   2: [0, 2]   3: [1, 3, 4]   4: [1, 2, 4]
+        let p = vec![0, 4, 6, 8, 11, 14];
+        let c = vec![0, 1, 2, 3, 1, 3, 0, 2, 1, 3, 4, 1, 2, 4];
+        let v: Vec<f64> = (1..=14).map(f64::from).collect();
+        let (ep, ec, ev) = with_tail_fill(&p, &c, &v, 2, |x| x, |x| x);
+        let r = rows(&ep, &ec, &ev);
+        // rows 0, 1 as they were
+        assert_eq!(r[0], vec![(0, 1.0), (1, 2.0), (2, 3.0), (3, 4.0)]);
+        assert_eq!(r[1], vec![(1, 5.0), (3, 6.0)]);
+        // row 2: pivot 0 reaches 1 (a leading column: not added), 2
+        // (stored) and 3 (added)
+        assert_eq!(r[2], vec![(0, 7.0), (2, 8.0), (3, 0.0)]);
+        // row 3: pivot 1 reaches 3, stored
+        assert_eq!(r[3], vec![(1, 9.0), (3, 10.0), (4, 11.0)]);
+        // row 4: pivot 1 reaches 3 (added); pivot 2 reaches nothing through
+        // row 2's own pattern (the fill (2, 3) is of level 1: not followed)
+        assert_eq!(r[4], vec![(1, 12.0), (2, 13.0), (3, 0.0), (4, 14.0)]);
+        // from = n: nothing changes
+        let (fp, fc, fv) = with_tail_fill(&p, &c, &v, 5, |x| x, |x| x);
+        assert_eq!((fp, fc, fv), (p.clone(), c.clone(), v.clone()));
+    }
+}
