@@ -54,8 +54,8 @@ pub(super) fn with_tail_fill<C: Copy + Send + Sync>(
                     if j >= i {
                         break;
                     }
-                    for kk in ptr[j]..ptr[j + 1] {
-                        let c = at(col[kk]);
+                    for &cj in &col[ptr[j]..ptr[j + 1]] {
+                        let c = at(cj);
                         if c > j && c >= from && mark[c] != i {
                             mark[c] = i;
                             cand.push(c);
