@@ -157,8 +157,13 @@ impl TripledIlu {
         let p = &m.p;
         let mut pv = p.val.clone();
         let mut rv = r.val.clone();
+        // (rows are sorted: the elimination below relies on it too)
         let find = |t: &Triangle, i: usize, c: usize| {
-            (t.ptr[i]..t.ptr[i + 1]).find(|&k| t.col[k] as usize == c)
+            let row = t.ptr[i]..t.ptr[i + 1];
+            t.col[row.clone()]
+                .binary_search(&(c as u32))
+                .ok()
+                .map(|k| row.start + k)
         };
         let mut pd = Vec::with_capacity(np);
         for s in 0..np {
