@@ -19,8 +19,8 @@
 
 use rayon::prelude::*;
 
-/// Rows in the compressed pattern `ptr`/`col` (columns sorted per row,
-/// `at(k)` the column of entry k) extended below row `from` as described
+/// Rows in the compressed pattern `ptr`/`col` (columns sorted per row;
+/// `at` reads a stored column as an index) extended below row `from` as described
 /// in the module doc: the extended `ptr`, the extended columns (`make`
 /// builds one) and the values, where `val` is the original values and the
 /// added entries are 0. Rows before `from` are copied unchanged.
