@@ -17,7 +17,7 @@ use crate::area::{
 use crate::math::{Real, Vec3};
 use crate::mls::operators::{par_frames, Neighborhoods};
 use crate::mls::{FitStats, Frame, JointLaplacian, MlsError, MlsParams};
-use crate::neighbors::neighbor_lists_between;
+use crate::neighbors::CellGrid;
 use crate::particles::{Codim, Particles};
 use crate::tension::{bud_force, filament_role, rim_force, sawtooth, FilamentRole};
 use faer::sparse::SparseRowMat;
@@ -315,8 +315,11 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
     let on_volume: Vec<bool> = if volume_x.is_empty() {
         vec![false; n_sheet]
     } else {
-        let vl = neighbor_lists_between(&nb.x[..n_sheet], &volume_x, h);
-        (0..n_sheet).map(|i| !vl.of(i).is_empty()).collect()
+        let grid = CellGrid::build(&volume_x, h);
+        nb.x[..n_sheet]
+            .par_iter()
+            .map(|x| grid.any_within(&volume_x, x, h))
+            .collect()
     };
     let terms = particle_terms(
         &nb,
@@ -339,7 +342,7 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
             _ => {}
         }
     }
-    let mut lap = JointLaplacian::assemble(&nb, &geom)?;
+    let mut lap = JointLaplacian::assemble_with_frames(&nb, &frames, &geom)?;
     let axes: Vec<crate::math::Mat3> = frames.iter().map(|f| f.axes).collect();
     counts.curvature_clamps = clamp_rows(&mut lap.matrix, &nb, &axes, h);
     counts.radius_clamps = rows
