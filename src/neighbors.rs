@@ -153,6 +153,31 @@ impl CellGrid {
 }
 
 impl CellGrid {
+    /// The occupied cells, sorted.
+    pub fn cells(&self) -> &[Cell] {
+        &self.cells
+    }
+
+    /// The points of cell `c` (ascending indices; empty when unoccupied).
+    pub fn members(&self, c: &Cell) -> &[u32] {
+        self.ranges
+            .get(c)
+            .map_or(&[], |&(s, e)| &self.order[s as usize..e as usize])
+    }
+
+    /// Appends the points of the 27 cells around `c` (itself included) to
+    /// `out`, cell by cell: the candidates of every query in `c` within the
+    /// cell size.
+    pub fn gather_block(&self, c: &Cell, out: &mut Vec<u32>) {
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    out.extend_from_slice(self.members(&[c[0] + dx, c[1] + dy, c[2] + dz]));
+                }
+            }
+        }
+    }
+
     /// True when some point of the grid lies within `r` of `q` (`r` at most
     /// the cell size); stops at the first one found.
     pub fn any_within(&self, points: &[Vec3], q: &Vec3, r: Real) -> bool {
@@ -228,101 +253,50 @@ impl NeighborLists {
 
 /// All pairs within `radius` inside one point set; a point is not its own
 /// neighbour. Each list is sorted by index.
-///
-/// Queries are visited cell by cell: the 27 surrounding ranges are gathered
-/// once per cell into a sorted candidate list with its coordinates in three
-/// flat arrays, and every point of the cell filters the candidates without
-/// branches into one flat buffer per cell. The rows are then copied into
-/// place in parallel. (Session 14: one `Vec` per row and a serial
-/// concatenation took about 40 % of the search on the fluid chain.)
 pub fn neighbor_lists(points: &[Vec3], radius: Real) -> NeighborLists {
     let grid = CellGrid::build(points, radius);
     let r2 = radius * radius;
-    // per cell: the rows of its points (in `order` sequence) back to back,
-    // and their lengths
-    type Scratch = (Vec<u32>, Vec<Real>, Vec<Real>, Vec<Real>);
-    let per_cell: Vec<(Vec<u32>, Vec<u32>)> = grid
+    // Queries are visited cell by cell: the 27 surrounding ranges are looked
+    // up once per cell and their candidates copied into a contiguous buffer.
+    let per_cell: Vec<Vec<(u32, Vec<u32>)>> = grid
         .cells
         .par_iter()
-        .map_init(
-            || -> Scratch { (Vec::new(), Vec::new(), Vec::new(), Vec::new()) },
-            |(cand, cx, cy, cz), c| {
-                cand.clear();
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            if let Some(&(s, e)) =
-                                grid.ranges.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
-                            {
-                                cand.extend_from_slice(&grid.order[s as usize..e as usize]);
-                            }
+        .map(|c| {
+            let mut cand: Vec<u32> = Vec::with_capacity(256);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        if let Some(&(s, e)) = grid.ranges.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
+                            cand.extend_from_slice(&grid.order[s as usize..e as usize]);
                         }
                     }
                 }
-                cand.sort_unstable();
-                cx.clear();
-                cy.clear();
-                cz.clear();
-                for &j in cand.iter() {
-                    let p = &points[j as usize];
-                    cx.push(p.x);
-                    cy.push(p.y);
-                    cz.push(p.z);
-                }
-                let (s, e) = grid.ranges[c];
-                let mine = &grid.order[s as usize..e as usize];
-                let mut flat: Vec<u32> = Vec::new();
-                let mut lens = Vec::with_capacity(mine.len());
-                for &i in mine {
+            }
+            cand.sort_unstable();
+            let cand_x: Vec<Vec3> = cand.iter().map(|&j| points[j as usize]).collect();
+            let (s, e) = grid.ranges[c];
+            grid.order[s as usize..e as usize]
+                .iter()
+                .map(|&i| {
                     let xi = points[i as usize];
-                    let at = flat.len();
-                    flat.resize(at + cand.len(), 0);
-                    let out = &mut flat[at..];
-                    let mut n = 0usize;
-                    for k in 0..cand.len() {
-                        let (dx, dy, dz) = (cx[k] - xi.x, cy[k] - xi.y, cz[k] - xi.z);
-                        let d2 = dx * dx + dy * dy + dz * dz;
-                        out[n] = cand[k];
-                        n += (d2 < r2 && cand[k] != i) as usize;
-                    }
-                    flat.truncate(at + n);
-                    lens.push(n as u32);
-                }
-                (flat, lens)
-            },
-        )
+                    let row: Vec<u32> = cand
+                        .iter()
+                        .zip(&cand_x)
+                        .filter(|(&j, xj)| j != i && (*xj - xi).norm_squared() < r2)
+                        .map(|(&j, _)| j)
+                        .collect();
+                    (i, row)
+                })
+                .collect()
+        })
         .collect();
-    // offsets in point order, and where each point's row lies
-    let mut src = vec![(0u32, 0u32); points.len()];
-    let mut len = vec![0u32; points.len()];
-    for (ci, (c, (_, lens))) in grid.cells.iter().zip(&per_cell).enumerate() {
-        let (s, e) = grid.ranges[c];
-        let mut at = 0u32;
-        for (&i, &l) in grid.order[s as usize..e as usize].iter().zip(lens) {
-            src[i as usize] = (ci as u32, at);
-            len[i as usize] = l;
-            at += l;
+    let mut rows = vec![Vec::new(); points.len()];
+    for cell in per_cell {
+        for (i, row) in cell {
+            rows[i as usize] = row;
         }
     }
-    let mut offsets = Vec::with_capacity(points.len() + 1);
-    offsets.push(0usize);
-    for &l in &len {
-        offsets.push(offsets[offsets.len() - 1] + l as usize);
-    }
-    let mut indices = vec![0u32; offsets[points.len()]];
-    let mut rows: Vec<&mut [u32]> = Vec::with_capacity(points.len());
-    let mut rest = indices.as_mut_slice();
-    for &l in &len {
-        let (row, tail) = rest.split_at_mut(l as usize);
-        rows.push(row);
-        rest = tail;
-    }
-    rows.into_par_iter().enumerate().for_each(|(i, row)| {
-        let (ci, at) = src[i];
-        let at = at as usize;
-        row.copy_from_slice(&per_cell[ci as usize].0[at..at + row.len()]);
-    });
-    NeighborLists { offsets, indices }
+    NeighborLists::from_rows(rows)
 }
 
 /// For every query point, the points of `points` within `radius` (a query
