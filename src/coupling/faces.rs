@@ -131,23 +131,35 @@ pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
         })
         .collect();
     entries.par_sort_unstable_by(|p, q| (p.0, p.1, p.2).cmp(&(q.0, q.1, q.2)));
+    // the runs of one face, then each face's K membership in parallel
+    let mut runs = Vec::new();
+    let mut k = 0;
+    while k < entries.len() {
+        let (a, s) = (entries[k].0, entries[k].1);
+        let mut e = k;
+        while e < entries.len() && entries[e].0 == a && entries[e].1 == s {
+            e += 1;
+        }
+        runs.push((k, e));
+        k = e;
+    }
+    let sides: Vec<Option<FaceSides>> = runs
+        .par_iter()
+        .map(|&(k, _)| {
+            let (a, s) = (entries[k].0 as usize, entries[k].1 as usize);
+            (!is_wall_face(g, s, a) && g.weight[a][s] >= MIN_OPEN && !g.is_prescribed(a, s))
+                .then(|| sys.face(g, a, s))
+                .flatten()
+        })
+        .collect();
     let ns = g.slots();
     let mut c = Constraints {
         ptr: vec![0],
         of_face: [vec![NONE; ns], vec![NONE; ns], vec![NONE; ns]],
         ..Default::default()
     };
-    let mut k = 0;
-    while k < entries.len() {
+    for (&(k, e), sides) in runs.iter().zip(sides) {
         let (a, s) = (entries[k].0 as usize, entries[k].1 as usize);
-        let mut e = k;
-        while e < entries.len() && entries[e].0 as usize == a && entries[e].1 as usize == s {
-            e += 1;
-        }
-        let sides =
-            (!is_wall_face(g, s, a) && g.weight[a][s] >= MIN_OPEN && !g.is_prescribed(a, s))
-                .then(|| sys.face(g, a, s))
-                .flatten();
         if let Some(sides) = sides {
             let total: Real = entries[k..e].iter().map(|t| t.3).sum();
             c.of_face[a][s] = c.faces.len() as u32;
@@ -161,7 +173,6 @@ pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
             }
             c.ptr.push(c.col.len());
         }
-        k = e;
     }
     c
 }

@@ -367,27 +367,54 @@ pub fn assemble(
     if form == Form::Monolithic && face_fill {
         // explicit zeros where eliminating a particle row fills the λ block:
         // faces of one axis that share a (free) particle
-        let mut faces_of: Vec<Vec<usize>> = vec![Vec::new(); 3 * np];
+        // the faces of each (free particle, axis), ascending, in compressed rows
+        let mut start = vec![0usize; 3 * np + 1];
         for f in 0..k.len() {
             let a = k.faces[f].0;
             for (i, _) in k.row(f) {
                 if !surf.fixed[i] {
-                    faces_of[3 * i + a].push(f);
+                    start[3 * i + a + 1] += 1;
                 }
             }
         }
-        let mut seen = vec![usize::MAX; k.len()];
+        for b in 0..3 * np {
+            start[b + 1] += start[b];
+        }
+        let mut at = start.clone();
+        let mut faces_of = vec![0u32; start[3 * np]];
         for f in 0..k.len() {
             let a = k.faces[f].0;
-            seen[f] = f;
             for (i, _) in k.row(f) {
-                for &g in &faces_of[3 * i + a] {
-                    if seen[g] != f {
-                        seen[g] = f;
-                        t.push(Triplet::new(mo + f, mo + g, 0.0));
-                    }
+                if !surf.fixed[i] {
+                    faces_of[at[3 * i + a]] = f as u32;
+                    at[3 * i + a] += 1;
                 }
             }
+        }
+        // each face's row of explicit zeros, in parallel (a marker per task)
+        let zeros: Vec<Vec<u32>> = (0..k.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map_init(
+                || vec![usize::MAX; k.len()],
+                |seen, f| {
+                    let a = k.faces[f].0;
+                    seen[f] = f;
+                    let mut row = Vec::new();
+                    for (i, _) in k.row(f) {
+                        for &g in &faces_of[start[3 * i + a]..start[3 * i + a + 1]] {
+                            if seen[g as usize] != f {
+                                seen[g as usize] = f;
+                                row.push(g);
+                            }
+                        }
+                    }
+                    row
+                },
+            )
+            .collect();
+        for (f, row) in zeros.iter().enumerate() {
+            t.extend(row.iter().map(|&g| Triplet::new(mo + f, mo + g as usize, 0.0)));
         }
     }
     let matrix = if let (true, Some(slot)) = (shared_p, slot.as_ref()) {
