@@ -35,19 +35,31 @@ pub fn voronoi_area(xp: &Vec3, frame: &Mat3, nbrs: impl Iterator<Item = Vec3>, h
     // inside a sheet the bisectors cut much closer (≤ 0.58 × on a hexagonal,
     // 0.5 × on a square lattice), but at an open edge the cell would extend
     // to the search square and give the particle up to 4 h² of area
-    let mut d: Vec<Real> = nbrs
-        .iter()
-        .map(|q| (q - xp).norm())
-        .filter(|d| *d > 0.0)
-        .collect();
-    d.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    let k = d.len().min(6);
+    let mut near = [0.0 as Real; 6];
+    let mut k = 0;
+    for q in &nbrs {
+        let d = (q - xp).norm();
+        if d > 0.0 && (k < 6 || d < near[5]) {
+            // insert into the ascending list of the (up to) 6 smallest
+            let mut i = k.min(5);
+            while i > 0 && near[i - 1] > d {
+                near[i] = near[i - 1];
+                i -= 1;
+            }
+            near[i] = d;
+            k = (k + 1).min(6);
+        }
+    }
     let half = if k > 0 {
-        (0.75 * d[..k].iter().sum::<Real>() / k as Real).min(h)
+        (0.75 * near[..k].iter().sum::<Real>() / k as Real).min(h)
     } else {
         h
     };
-    let mut poly: Vec<[Real; 2]> = vec![[-half, -half], [half, -half], [half, half], [-half, half]];
+    // the cell, clipped by each bisector in turn (two buffers, no copy when
+    // a bisector misses the cell)
+    let mut poly: Vec<[Real; 2]> = Vec::with_capacity(16);
+    poly.extend([[-half, -half], [half, -half], [half, half], [-half, half]]);
+    let mut next: Vec<[Real; 2]> = Vec::with_capacity(16);
     let mut clipped = false;
     for q in nbrs {
         let d = q - xp;
@@ -57,8 +69,10 @@ pub fn voronoi_area(xp: &Vec3, frame: &Mat3, nbrs: impl Iterator<Item = Vec3>, h
             continue;
         }
         // keep points y with y·n ≤ |n|²/2
-        poly = clip(&poly, n, 0.5 * nn);
         clipped = true;
+        if clip_into(&poly, n, 0.5 * nn, &mut next) {
+            std::mem::swap(&mut poly, &mut next);
+        }
         if poly.len() < 3 {
             return 0.0;
         }
@@ -69,9 +83,15 @@ pub fn voronoi_area(xp: &Vec3, frame: &Mat3, nbrs: impl Iterator<Item = Vec3>, h
     polygon_area(&poly)
 }
 
-fn clip(poly: &[[Real; 2]], n: [Real; 2], c: Real) -> Vec<[Real; 2]> {
+/// The part of `poly` where y·n ≤ c, written into `out`; returns false (and
+/// leaves `out` alone) when the whole polygon is kept, which is what the
+/// clip would return then.
+fn clip_into(poly: &[[Real; 2]], n: [Real; 2], c: Real, out: &mut Vec<[Real; 2]>) -> bool {
     let f = |p: &[Real; 2]| p[0] * n[0] + p[1] * n[1] - c;
-    let mut out = Vec::with_capacity(poly.len() + 1);
+    if poly.iter().all(|p| f(p) <= 0.0) {
+        return false;
+    }
+    out.clear();
     for i in 0..poly.len() {
         let a = poly[i];
         let b = poly[(i + 1) % poly.len()];
@@ -84,7 +104,7 @@ fn clip(poly: &[[Real; 2]], n: [Real; 2], c: Real) -> Vec<[Real; 2]> {
             out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
         }
     }
-    out
+    true
 }
 
 fn polygon_area(p: &[[Real; 2]]) -> Real {
