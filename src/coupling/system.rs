@@ -448,7 +448,10 @@ pub fn assemble(
             .collect();
         let rest = rows_from_triplets(n, n, &t)?;
         let rest = Csr::from_faer(rest.as_ref())?;
-        SystemMatrix::Shared(Tripled::from_parts(np, halves, &rows, &rest)?)
+        // the impulse rows split by face axis (faces are sorted by axis, and
+        // a face row couples only to its own axis's particle components and
+        // faces); the pressure rows after them couple to all
+        SystemMatrix::Shared(Tripled::from_parts(np, halves, &rows, &rest)?.with_sequential_tail(qo))
     } else if reorder {
         // the triplets are out of row order: bucket them by row first
         SystemMatrix::General(rows_from_triplets(n, n, &t)?)

@@ -26,6 +26,107 @@ fn tail_chunks(n3: usize, n: usize) -> Vec<usize> {
     b
 }
 
+/// Boundaries of the blocks that rows `n3..seq` of `r` split into: a row
+/// of one block has no entry in the columns `n3..seq` of another (its
+/// entries there lie between the block's first and last row). First row of
+/// each block, then `seq`.
+fn tail_blocks(r: &Triangle, n3: usize, seq: usize) -> Vec<usize> {
+    let span = |i: usize| {
+        let (mut lo, mut hi) = (i, i);
+        for k in r.ptr[i]..r.ptr[i + 1] {
+            let c = r.col[k] as usize;
+            if c >= n3 && c < seq {
+                lo = lo.min(c);
+                hi = hi.max(c);
+            }
+        }
+        (lo, hi)
+    };
+    let spans: Vec<(usize, usize)> = (n3..seq).into_par_iter().map(span).collect();
+    // a boundary at s: no row before s reaches s or beyond, no row from s on
+    // reaches before s
+    let mut suffix_lo = vec![seq; spans.len() + 1];
+    for e in (0..spans.len()).rev() {
+        suffix_lo[e] = suffix_lo[e + 1].min(spans[e].0);
+    }
+    let mut b = vec![n3];
+    let mut reach = 0;
+    for e in 0..spans.len() {
+        let s = n3 + e;
+        if e > 0 && reach < s && suffix_lo[e] >= s {
+            b.push(s);
+        }
+        reach = reach.max(spans[e].1);
+    }
+    b.push(seq);
+    b.dedup();
+    b
+}
+
+/// Eliminates rows `rows` (≥ n3) in their columns n3.. (their particle
+/// columns are done): `vals` holds the values of entries `base..` of `r`,
+/// covering these rows and every row their pivots lie in; `rd` the
+/// diagonal entries of rows n3..; `pos` an all-unset marker of n entries
+/// (left unset). The first zero or non-finite pivot is reported.
+fn eliminate_tail(
+    r: &Triangle,
+    rd: &[usize],
+    n3: usize,
+    rows: std::ops::Range<usize>,
+    vals: &mut [f64],
+    base: usize,
+    pos: &mut [usize],
+) -> Result<(), SolveError> {
+    for i in rows {
+        let row = r.ptr[i]..r.ptr[i + 1];
+        for k in row.clone() {
+            pos[r.col[k] as usize] = k;
+        }
+        for k in row.clone() {
+            let c = r.col[k] as usize;
+            if c >= i {
+                break;
+            }
+            if c >= n3 {
+                let l = vals[k - base] / vals[rd[c - n3] - base];
+                vals[k - base] = l;
+                for kk in rd[c - n3] + 1..r.ptr[c + 1] {
+                    let q = pos[r.col[kk] as usize];
+                    if q != usize::MAX {
+                        vals[q - base] -= l * vals[kk - base];
+                    }
+                }
+            }
+        }
+        for k in row {
+            pos[r.col[k] as usize] = usize::MAX;
+        }
+        let dv = vals[rd[i - n3] - base];
+        if dv == 0.0 || !dv.is_finite() {
+            for kk in r.ptr[i]..r.ptr[i + 1] {
+                pos[r.col[kk] as usize] = usize::MAX;
+            }
+            return Err(SolveError::ZeroPivot { row: i });
+        }
+    }
+    Ok(())
+}
+
+/// Splits `v` (whose element 0 is index `off`) at the given increasing
+/// indices (≥ off) into consecutive mutable pieces.
+fn split_at_many<'a, T>(mut v: &'a mut [T], off: usize, at: &[usize]) -> Vec<&'a mut [T]> {
+    let mut out = Vec::with_capacity(at.len() + 1);
+    let mut from = off;
+    for &a in at {
+        let (head, tail) = std::mem::take(&mut v).split_at_mut(a - from);
+        out.push(head);
+        v = tail;
+        from = a;
+    }
+    out.push(v);
+    out
+}
+
 /// ILU(0) of a [`Tripled`] matrix with P's factors stored once.
 pub struct TripledIlu {
     n: usize,
@@ -48,6 +149,9 @@ pub struct TripledIlu {
     ut: Triangle,
     /// Pivots of rows 3·np.. (indexed from 3·np).
     dt: Vec<f64>,
+    /// Boundaries of the independent blocks of rows 3·np..`seq` (first row
+    /// of each, then `seq`), worked in parallel; rows `seq`.. in order.
+    pub(super) blocks: Vec<usize>,
 }
 
 /// ILU(0) elimination of P's rows `rows` and of their entries outside P
@@ -258,35 +362,28 @@ impl TripledIlu {
                     }
                 });
         }
-        for i in n3..n {
-            let row = r.ptr[i]..r.ptr[i + 1];
-            for k in row.clone() {
-                pos[r.col[k] as usize] = k;
-            }
-            for k in row.clone() {
-                let c = r.col[k] as usize;
-                if c >= i {
-                    break;
-                }
-                if c >= n3 {
-                    let l = rv[k] / rv[rd[c - n3]];
-                    rv[k] = l;
-                    for kk in rd[c - n3] + 1..r.ptr[c + 1] {
-                        let q = pos[r.col[kk] as usize];
-                        if q != usize::MAX {
-                            rv[q] -= l * rv[kk];
-                        }
-                    }
-                }
-            }
-            for k in row {
-                pos[r.col[k] as usize] = usize::MAX;
-            }
-            let dv = rv[rd[i - n3]];
-            if dv == 0.0 || !dv.is_finite() {
-                return Err(SolveError::ZeroPivot { row: i });
+        // rows n3..seq: their blocks in parallel (a row's pivots in these
+        // columns lie in its own block); then rows seq.. in order
+        let seq = m.seq_from.clamp(n3, n);
+        let blocks = tail_blocks(r, n3, seq);
+        {
+            let cuts: Vec<usize> = blocks.iter().map(|&b| r.ptr[b]).collect();
+            let mut pieces = split_at_many(&mut rv[..], 0, &cuts);
+            let slices: Vec<&mut [f64]> = pieces.drain(1..cuts.len()).collect();
+            let firsts: Vec<Result<(), SolveError>> = slices
+                .into_par_iter()
+                .zip(blocks.par_windows(2))
+                .map_init(
+                    || vec![usize::MAX; n],
+                    |pos, (vals, w)| eliminate_tail(r, &rd, n3, w[0]..w[1], vals, r.ptr[w[0]], pos),
+                )
+                .collect();
+            // the first failing row, as the sequential pass would report it
+            if let Some(e) = firsts.into_iter().find_map(Result::err) {
+                return Err(e);
             }
         }
+        eliminate_tail(r, &rd, n3, seq..n, &mut rv, 0, &mut pos)?;
         let pick =
             |t: &Triangle, v: &[f64], rows: &dyn Fn(usize) -> std::ops::Range<usize>, nr: usize| {
                 let mut out = Triangle {
@@ -329,6 +426,7 @@ impl TripledIlu {
             lt_mid,
             ut: pick(r, &rv, &tail_u, n),
             dt: rd.iter().map(|&k| rv[k]).collect(),
+            blocks,
         })
     }
 }
@@ -417,20 +515,56 @@ impl Preconditioner for TripledIlu {
                     *zi = acc;
                 });
         }
-        for i in n3..n {
-            let mut acc = z[i];
-            for k in self.lt_mid[i - n3]..lt.ptr[i + 1] {
-                acc -= lt.val[k] * z[lt.col[k] as usize];
+        let own = |zb: &mut [f64], off: usize, rows: std::ops::Range<usize>| {
+            for i in rows {
+                let mut acc = zb[i - off];
+                for k in self.lt_mid[i - n3]..lt.ptr[i + 1] {
+                    acc -= lt.val[k] * zb[lt.col[k] as usize - off];
+                }
+                zb[i - off] = acc;
             }
-            z[i] = acc;
+        };
+        let bl = &self.blocks;
+        let seq = bl[bl.len() - 1];
+        {
+            let mut pieces = split_at_many(&mut z[..seq], 0, &bl[..bl.len() - 1]);
+            pieces
+                .drain(1..)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .zip(bl.par_windows(2))
+                .for_each(|(zb, w)| own(zb, w[0], w[0]..w[1]));
         }
+        own(z, 0, seq..n);
         // U z = y: the other rows, the separator, then the halves in parallel
-        for i in (n3..n).rev() {
-            let mut acc = z[i];
-            for k in ut.ptr[i]..ut.ptr[i + 1] {
-                acc -= ut.val[k] * z[ut.col[k] as usize];
+        // (rows seq.. first; a block's rows reach their own block and seq..)
+        let back = |zb: &mut [f64], off: usize, far: &[f64], rows: std::ops::Range<usize>| {
+            for i in rows.rev() {
+                let mut acc = zb[i - off];
+                for k in ut.ptr[i]..ut.ptr[i + 1] {
+                    let c = ut.col[k] as usize;
+                    acc -= ut.val[k] * if c >= seq { far[c - seq] } else { zb[c - off] };
+                }
+                zb[i - off] = acc / self.dt[i - n3];
             }
-            z[i] = acc / self.dt[i - n3];
+        };
+        {
+            let (zh, zs) = z.split_at_mut(seq);
+            for i in (seq..n).rev() {
+                let mut acc = zs[i - seq];
+                for k in ut.ptr[i]..ut.ptr[i + 1] {
+                    acc -= ut.val[k] * zs[ut.col[k] as usize - seq];
+                }
+                zs[i - seq] = acc / self.dt[i - n3];
+            }
+            let zs = &*zs;
+            let mut pieces = split_at_many(&mut zh[..], 0, &bl[..bl.len() - 1]);
+            pieces
+                .drain(1..)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .zip(bl.par_windows(2))
+                .for_each(|(zb, w)| back(zb, w[0], zs, w[0]..w[1]));
         }
         {
             let (zs, tail) = z[3 * b..].split_at_mut(3 * (np - b));
