@@ -134,25 +134,16 @@ impl CellGrid {
     ) {
         debug_assert!(r <= self.h * (1.0 + 1e-12));
         let r2 = r * r;
-        let c = cell_of(q, self.inv_h);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(&(s, e)) = self.ranges.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
-                        for &j in &self.order[s as usize..e as usize] {
-                            let d2 = (points[j as usize] - q).norm_squared();
-                            if d2 < r2 {
-                                f(j as usize, d2);
-                            }
-                        }
-                    }
+        for cell in self.block(&cell_of(q, self.inv_h)) {
+            for &j in cell {
+                let d2 = (points[j as usize] - q).norm_squared();
+                if d2 < r2 {
+                    f(j as usize, d2);
                 }
             }
         }
     }
-}
 
-impl CellGrid {
     /// The occupied cells, sorted.
     pub fn cells(&self) -> &[Cell] {
         &self.cells
@@ -169,13 +160,20 @@ impl CellGrid {
     /// `out`, cell by cell: the candidates of every query in `c` within the
     /// cell size.
     pub fn gather_block(&self, c: &Cell, out: &mut Vec<u32>) {
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    out.extend_from_slice(self.members(&[c[0] + dx, c[1] + dy, c[2] + dz]));
-                }
-            }
+        for cell in self.block(c) {
+            out.extend_from_slice(cell);
         }
+    }
+
+    /// The points of each of the 27 cells around `c` (itself included), in
+    /// a fixed order.
+    fn block<'a>(&'a self, c: &Cell) -> impl Iterator<Item = &'a [u32]> + 'a {
+        let c = *c;
+        (-1..=1).flat_map(move |dx| {
+            (-1..=1).flat_map(move |dy| {
+                (-1..=1).map(move |dz| self.members(&[c[0] + dx, c[1] + dy, c[2] + dz]))
+            })
+        })
     }
 
     /// True when some point of the grid lies within `r` of `q` (`r` at most
@@ -183,22 +181,8 @@ impl CellGrid {
     pub fn any_within(&self, points: &[Vec3], q: &Vec3, r: Real) -> bool {
         debug_assert!(r <= self.h * (1.0 + 1e-12));
         let r2 = r * r;
-        let c = cell_of(q, self.inv_h);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(&(s, e)) = self.ranges.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
-                        if self.order[s as usize..e as usize]
-                            .iter()
-                            .any(|&j| (points[j as usize] - q).norm_squared() < r2)
-                        {
-                            return true;
-                        }
-                    }
-                }
-            }
-        }
-        false
+        self.block(&cell_of(q, self.inv_h))
+            .any(|cell| cell.iter().any(|&j| (points[j as usize] - q).norm_squared() < r2))
     }
 }
 
@@ -263,15 +247,7 @@ pub fn neighbor_lists(points: &[Vec3], radius: Real) -> NeighborLists {
         .par_iter()
         .map(|c| {
             let mut cand: Vec<u32> = Vec::with_capacity(256);
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        if let Some(&(s, e)) = grid.ranges.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
-                            cand.extend_from_slice(&grid.order[s as usize..e as usize]);
-                        }
-                    }
-                }
-            }
+            grid.gather_block(c, &mut cand);
             cand.sort_unstable();
             let cand_x: Vec<Vec3> = cand.iter().map(|&j| points[j as usize]).collect();
             let (s, e) = grid.ranges[c];
