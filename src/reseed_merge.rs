@@ -252,9 +252,7 @@ pub(super) fn near_volume(parts: &Particles, volume: &[Vec3], r: Real) -> Vec<bo
             if parts.codim[i] == Codim::Volume {
                 return false;
             }
-            let mut hit = false;
-            grid.for_each_within(&vol, &parts.x[i], r, |_, _| hit = true);
-            hit
+            grid.any_within(&vol, &parts.x[i], r)
         })
         .collect()
 }
