@@ -181,8 +181,10 @@ impl CellGrid {
     pub fn any_within(&self, points: &[Vec3], q: &Vec3, r: Real) -> bool {
         debug_assert!(r <= self.h * (1.0 + 1e-12));
         let r2 = r * r;
-        self.block(&cell_of(q, self.inv_h))
-            .any(|cell| cell.iter().any(|&j| (points[j as usize] - q).norm_squared() < r2))
+        self.block(&cell_of(q, self.inv_h)).any(|cell| {
+            cell.iter()
+                .any(|&j| (points[j as usize] - q).norm_squared() < r2)
+        })
     }
 }
 

@@ -116,15 +116,16 @@ pub fn update(
                     {
                         continue;
                     }
-                    if codim[p] == Codim::Volume && surrounded(p, x, codim, cand, sheets, h, prm.thin_distance) {
+                    if codim[p] == Codim::Volume
+                        && surrounded(p, x, codim, cand, sheets, h, prm.thin_distance)
+                    {
                         continue;
                     }
                     // the neighbours within h, ascending (as `neighbor_lists`)
                     row.clear();
-                    row.extend(
-                        cand.iter()
-                            .filter(|&&q| q as usize != p && (x[q as usize] - x[p]).norm_squared() < h2),
-                    );
+                    row.extend(cand.iter().filter(|&&q| {
+                        q as usize != p && (x[q as usize] - x[p]).norm_squared() < h2
+                    }));
                     let frame: Mat3 = pca_frame(
                         &x[p],
                         row.iter()
@@ -138,7 +139,9 @@ pub fn update(
                     if next == codim[p] {
                         continue;
                     }
-                    let v = (next == Codim::Volume).then(|| joined_velocity(p, parts, row, h)).flatten();
+                    let v = (next == Codim::Volume)
+                        .then(|| joined_velocity(p, parts, row, h))
+                        .flatten();
                     out.push((p as u32, next, v));
                 }
                 out
@@ -305,7 +308,10 @@ mod tests {
                 let nb = lists.of(p);
                 let frame: Mat3 = pca_frame(
                     &x[p],
-                    nb.iter().map(|&q| q as usize).filter(|&q| same(p, q)).map(|q| x[q]),
+                    nb.iter()
+                        .map(|&q| q as usize)
+                        .filter(|&q| same(p, q))
+                        .map(|q| x[q]),
                     h,
                 )
                 .axes;
@@ -330,7 +336,9 @@ mod tests {
         let s = h / 3.0;
         let mut seed = 12345u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 11) as Real / (1u64 << 53) as Real) - 0.5
         };
         let mut p = Particles::new();
@@ -383,7 +391,10 @@ mod tests {
         }
         let mut bare_ref = bare.clone();
         let cbare = update(&mut bare, &prm, &[], &SolidSet::default());
-        assert_eq!(cbare, update_reference(&mut bare_ref, &prm, &[], &SolidSet::default()));
+        assert_eq!(
+            cbare,
+            update_reference(&mut bare_ref, &prm, &[], &SolidSet::default())
+        );
         assert_eq!(bare.codim, bare_ref.codim);
         assert!(cbare.volume_to_sheet > 500, "{cbare:?}");
         let (mut a, mut b) = (base.clone(), base.clone());
@@ -408,11 +419,22 @@ mod tests {
             for &p in grid.members(c) {
                 if base.codim[p as usize] == Codim::Volume {
                     vol += 1;
-                    deep += surrounded(p as usize, &base.x, &base.codim, &cand, &sheets, h, prm.thin_distance) as usize;
+                    deep += surrounded(
+                        p as usize,
+                        &base.x,
+                        &base.codim,
+                        &cand,
+                        &sheets,
+                        h,
+                        prm.thin_distance,
+                    ) as usize;
                 }
             }
         }
-        assert!(deep * 5 > vol, "{deep} of {vol} volume particles surrounded");
+        assert!(
+            deep * 5 > vol,
+            "{deep} of {vol} volume particles surrounded"
+        );
         assert!(deep < vol);
     }
 

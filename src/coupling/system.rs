@@ -414,7 +414,10 @@ pub fn assemble(
             )
             .collect();
         for (f, row) in zeros.iter().enumerate() {
-            t.extend(row.iter().map(|&g| Triplet::new(mo + f, mo + g as usize, 0.0)));
+            t.extend(
+                row.iter()
+                    .map(|&g| Triplet::new(mo + f, mo + g as usize, 0.0)),
+            );
         }
     }
     let matrix = if let (true, Some(slot)) = (shared_p, slot.as_ref()) {
@@ -451,7 +454,9 @@ pub fn assemble(
         // the impulse rows split by face axis (faces are sorted by axis, and
         // a face row couples only to its own axis's particle components and
         // faces); the pressure rows after them couple to all
-        SystemMatrix::Shared(Tripled::from_parts(np, halves, &rows, &rest)?.with_sequential_tail(qo))
+        SystemMatrix::Shared(
+            Tripled::from_parts(np, halves, &rows, &rest)?.with_sequential_tail(qo),
+        )
     } else if reorder {
         // the triplets are out of row order: bucket them by row first
         SystemMatrix::General(rows_from_triplets(n, n, &t)?)

@@ -503,9 +503,13 @@ mod tests {
                 tilu.apply(&x, &mut z2);
                 // the face rows in their independent blocks (every face row
                 // its own block; with the fill, one block per axis)
-                let tilu = TripledIlu::from_tripled(&tr.with_sequential_tail(3 * 90 + 400), fill)
-                    .unwrap();
-                assert!(tilu.blocks.len() >= if fill { 4 } else { 400 }, "{:?}", tilu.blocks);
+                let tilu =
+                    TripledIlu::from_tripled(&tr.with_sequential_tail(3 * 90 + 400), fill).unwrap();
+                assert!(
+                    tilu.blocks.len() >= if fill { 4 } else { 400 },
+                    "{:?}",
+                    tilu.blocks
+                );
                 let mut z3 = vec![0.0; n];
                 tilu.apply(&x, &mut z3);
                 assert_eq!(z1, z3, "{threads} threads, tail fill {fill}, blocks");
