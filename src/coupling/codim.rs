@@ -81,12 +81,6 @@ pub fn update(
     let codim = &parts.codim;
     let grid = CellGrid::build(x, h);
     let h2 = h * h;
-    let same = |p: usize, q: usize| match codim[p] {
-        Codim::Volume => codim[q] != Codim::Point,
-        Codim::Sheet => codim[q] == Codim::Sheet,
-        Codim::Filament => codim[q] == Codim::Filament,
-        Codim::Point => false,
-    };
     // per cell: the particles that change, with the velocity of those that
     // join a body (a sheet or filament particle that joins takes the body's
     // local velocity, a PIC reset: FLIP would keep its own velocity, less
@@ -107,13 +101,7 @@ pub fn update(
                 let mut out = Vec::new();
                 for &p in grid.members(c) {
                     let p = p as usize;
-                    if parts.fixed[p]
-                        || codim[p] == Codim::Point
-                        || sources.iter().any(|s| s.protects(&x[p], h))
-                        || (codim[p] == Codim::Volume
-                            && !solids.is_empty()
-                            && solids.phi(&x[p]) < h)
-                    {
+                    if held(p, parts, sources, solids, h) {
                         continue;
                     }
                     if codim[p] == Codim::Volume
@@ -126,16 +114,7 @@ pub fn update(
                     row.extend(cand.iter().filter(|&&q| {
                         q as usize != p && (x[q as usize] - x[p]).norm_squared() < h2
                     }));
-                    let frame: Mat3 = pca_frame(
-                        &x[p],
-                        row.iter()
-                            .map(|&q| q as usize)
-                            .filter(|&q| same(p, q))
-                            .map(|q| x[q]),
-                        h,
-                    )
-                    .axes;
-                    let next = new_codim(p, &frame, x, codim, &parts.fixed, row, prm);
+                    let next = by_the_rules(p, parts, row, prm);
                     if next == codim[p] {
                         continue;
                     }
@@ -156,6 +135,40 @@ pub fn update(
         }
     }
     TransitionCounts::apply(&mut parts.codim, next)
+}
+
+/// True when particle `p` keeps its codimension whatever its neighbours:
+/// fixed, a point, in a jet's source region, or a volume particle within h
+/// of a solid.
+fn held(p: usize, parts: &Particles, sources: &[Source], solids: &SolidSet, h: Real) -> bool {
+    let (x, codim) = (&parts.x, &parts.codim);
+    parts.fixed[p]
+        || codim[p] == Codim::Point
+        || sources.iter().any(|s| s.protects(&x[p], h))
+        || (codim[p] == Codim::Volume && !solids.is_empty() && solids.phi(&x[p]) < h)
+}
+
+/// The codimension the §8 rules give particle `p` with its neighbours
+/// `nbrs` within h (ascending): the weighted-PCA frame of its neighbours of
+/// the same kind (a volume particle: all but points), then [`new_codim`].
+fn by_the_rules(p: usize, parts: &Particles, nbrs: &[u32], prm: &TransitionParams) -> Codim {
+    let (x, codim) = (&parts.x, &parts.codim);
+    let same = |q: usize| match codim[p] {
+        Codim::Volume => codim[q] != Codim::Point,
+        Codim::Sheet => codim[q] == Codim::Sheet,
+        Codim::Filament => codim[q] == Codim::Filament,
+        Codim::Point => false,
+    };
+    let frame: Mat3 = pca_frame(
+        &x[p],
+        nbrs.iter()
+            .map(|&q| q as usize)
+            .filter(|&q| same(q))
+            .map(|q| x[q]),
+        prm.h,
+    )
+    .axes;
+    new_codim(p, &frame, x, codim, &parts.fixed, nbrs, prm)
 }
 
 /// The mass-weighted mean velocity of the volume particles within h of a
@@ -290,32 +303,13 @@ mod tests {
         let x = &parts.x;
         let codim = &parts.codim;
         let lists = crate::neighbors::neighbor_lists(x, h);
-        let same = |p: usize, q: usize| match codim[p] {
-            Codim::Volume => codim[q] != Codim::Point,
-            Codim::Sheet => codim[q] == Codim::Sheet,
-            Codim::Filament => codim[q] == Codim::Filament,
-            Codim::Point => false,
-        };
         let next: Vec<Codim> = (0..x.len())
             .map(|p| {
-                if parts.fixed[p]
-                    || codim[p] == Codim::Point
-                    || sources.iter().any(|s| s.protects(&x[p], h))
-                    || (codim[p] == Codim::Volume && !solids.is_empty() && solids.phi(&x[p]) < h)
-                {
-                    return codim[p];
+                if held(p, parts, sources, solids, h) {
+                    codim[p]
+                } else {
+                    by_the_rules(p, parts, lists.of(p), prm)
                 }
-                let nb = lists.of(p);
-                let frame: Mat3 = pca_frame(
-                    &x[p],
-                    nb.iter()
-                        .map(|&q| q as usize)
-                        .filter(|&q| same(p, q))
-                        .map(|q| x[q]),
-                    h,
-                )
-                .axes;
-                new_codim(p, &frame, x, codim, &parts.fixed, nb, prm)
             })
             .collect();
         let joined: Vec<(usize, Vec3)> = (0..x.len())
