@@ -1,5 +1,7 @@
 //! Resting droplet at R = 4Δx, Δt = 0.01 s, 1 s: largest particle speed
 //! and interior pressure against 2σ/R, for both band velocities.
+//! Arguments (all optional): R/Δx, substeps, level-set radius (× Δx),
+//! `coupling.mass_floor`.
 use codimfx::coupling::BandVelocity;
 use codimfx::math::Real;
 use codimfx::step::{step, StageTimes};
@@ -8,11 +10,19 @@ use codimfx::validate::droplet::DropletCase;
 fn main() {
     let cells: Real = std::env::args().nth(1).map_or(4.0, |s| s.parse().unwrap());
     let n: usize = std::env::args().nth(2).map_or(100, |s| s.parse().unwrap());
+    let sr: Option<Real> = std::env::args().nth(3).map(|s| s.parse().unwrap());
+    let floor: Option<Real> = std::env::args().nth(4).map(|s| s.parse().unwrap());
     for band in [BandVelocity::Sheet, BandVelocity::Extrapolated] {
-        let case = DropletCase {
+        let mut case = DropletCase {
             band,
             ..DropletCase::paper(cells)
         };
+        if let Some(sr) = sr {
+            case.surface_radius = sr;
+        }
+        if let Some(f) = floor {
+            case.mass_floor = f;
+        }
         let (mut st, prm) = case.build().unwrap();
         let t = std::time::Instant::now();
         let (mut it, mut p, mut vmax) = (0usize, 0.0, 0.0);

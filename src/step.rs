@@ -178,6 +178,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
         face_fill: s.coupling.face_fill,
         shared_block: s.coupling.shared_block,
         tail_fill: s.coupling.tail_fill,
+        mass_floor: s.coupling.mass_floor,
         solver: BicgstabParams {
             tol: s.coupling.tolerance,
             max_iter: s.coupling.max_iterations as usize,

@@ -237,6 +237,9 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
     check(&e, "coupling.tolerance", 24, "(0, 1)");
     let e = err(&format!("{GOOD}coupling:\n  max_iterations: 0\n"));
     check(&e, "coupling.max_iterations", 24, "at least 1");
+    assert_eq!(s.coupling.mass_floor, 0.05);
+    let e = err(&format!("{GOOD}coupling:\n  mass_floor: 0\n"));
+    check(&e, "coupling.mass_floor", 24, "[1e-4, 1]");
     let e = err(&format!("{GOOD}coupling:\n  method: cg\n"));
     assert!(e.to_string().contains("unknown variant `cg`"), "{e}");
     assert_eq!(e.path(), "coupling.method", "{e}");

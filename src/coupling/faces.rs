@@ -52,6 +52,9 @@ pub struct Constraints {
     pub val: Vec<Real>,
     /// Constraint index of face (a, s), or [`NONE`] (one table per axis).
     pub of_face: [Vec<u32>; 3],
+    /// Smallest mass fraction a face carries in the solve
+    /// ([`super::system::mono_theta`]; `coupling.mass_floor`).
+    pub floor: Real,
 }
 
 impl Constraints {
@@ -156,6 +159,7 @@ pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
     let mut c = Constraints {
         ptr: vec![0],
         of_face: [vec![NONE; ns], vec![NONE; ns], vec![NONE; ns]],
+        floor: super::system::MASS_FLOOR,
         ..Default::default()
     };
     for (&(k, e), sides) in runs.iter().zip(sides) {

@@ -84,6 +84,7 @@ pub fn solve(
                 // eq. (19) (per face, so releasing more faces later leaves
                 // the others' as they are)
                 let mut constrained = faces::constraints(grid, &full, sheets);
+                constrained.floor = prm.mass_floor;
                 let released = constrained.release_enclosed(grid, &full, sheets);
                 if prm.face_mass == FaceMass::Sheet {
                     if let Some(s) = volume_spacing(parts, prm.surface.density) {

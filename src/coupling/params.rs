@@ -67,6 +67,9 @@ pub struct CouplingParams {
     /// system's incomplete factorisation (particles-first order only;
     /// [`crate::linsolve::Ilu0::with_tail_fill`]).
     pub tail_fill: bool,
+    /// Smallest mass fraction of a constraint face (`coupling.mass_floor`,
+    /// [`super::system::MASS_FLOOR`] by default).
+    pub mass_floor: Real,
     /// Particle side.
     pub surface: SurfaceParams,
     /// Pressure PCG rule, used when there are no constraint faces.

@@ -178,6 +178,7 @@ impl Constraints {
         *self = Constraints {
             ptr: vec![0],
             of_face: [vec![NONE; ns], vec![NONE; ns], vec![NONE; ns]],
+            floor: old.floor,
             ..Default::default()
         };
         for f in (0..old.len()).filter(|&f| !drop[f]) {

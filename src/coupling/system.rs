@@ -20,7 +20,7 @@
 //! = (J u)_f: a constraint face carries the liquid fraction θ_f of its mass
 //! (M₍₀₎ of eq. 19). θ_f is [`Constraints::mass`]: the ghost-fluid fraction
 //! of the pressure's level set, or the fraction inside the sheet
-//! ([`Constraints::set_mass`]), bounded below by [`MASS_FLOOR`]; in the
+//! ([`Constraints::set_mass`]), bounded below by [`Constraints::floor`]; in the
 //! monolithic form the constraint faces' entries of A use the same
 //! θ_f (A is corrected from the pressure solve's ghost-fluid θ). At rest
 //! μ_f = −(Gq)_f whatever θ_f is, so θ_f changes the inertia, never the
@@ -46,17 +46,21 @@ use crate::math::{Real, Vec3};
 use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
 
-/// Smallest face-mass fraction. The monolithic form's face rows divide by
-/// it: a massless face outside the sheet would make entries of size
-/// w/θ → ∞ in A and in the μ block. The reduced form uses the same bound so
-/// that both forms solve the same equations.
+/// Default smallest face-mass fraction (`coupling.mass_floor`). The
+/// monolithic form's face rows divide by it: a massless face outside the
+/// sheet would make entries of size w/θ → ∞ in A and in the μ block. The
+/// reduced form uses the same bound so that both forms solve the same
+/// equations. The floor is inertia the faces outside the sheet add to it:
+/// 0.005 takes the l = 2 period at the droplet presets' R = 6.1Δx from
+/// +4.2 % to +2.8 % of Rayleigh's, at about 1.5 times the iterations in the
+/// fluid chain (`docs/decisions.md`, "The mass floor").
 pub const MASS_FLOOR: Real = 0.05;
 
-/// θ_f of constraint face `f` (both forms use the same, so that they solve
-/// the same equations).
+/// θ_f of constraint face `f`, at least [`Constraints::floor`] (both forms
+/// use the same, so that they solve the same equations).
 #[inline]
 pub fn mono_theta(k: &Constraints, f: usize) -> Real {
-    k.mass[f].max(MASS_FLOOR)
+    k.mass[f].max(k.floor)
 }
 
 /// Physical scalars of the solve.

@@ -105,6 +105,16 @@ pub struct CouplingSettings {
     /// on A's pattern). Same system and tolerance; far fewer iterations.
     #[serde(default = "default_tail_fill")]
     pub tail_fill: bool,
+    /// Smallest mass fraction of a constraint face, in (0, 1]. The faces
+    /// outside the sheet carry (nearly) no liquid; the floor keeps the
+    /// monolithic system's face rows bounded. Smaller is more accurate
+    /// (the l = 2 period) and costs iterations (`docs/decisions.md`).
+    #[serde(default = "default_mass_floor")]
+    pub mass_floor: f64,
+}
+
+fn default_mass_floor() -> f64 {
+    crate::coupling::system::MASS_FLOOR
 }
 
 /// `coupling.band`.
@@ -153,6 +163,7 @@ impl Default for CouplingSettings {
             face_fill: default_face_fill(),
             shared_block: default_shared_block(),
             tail_fill: default_tail_fill(),
+            mass_floor: default_mass_floor(),
         }
     }
 }
@@ -277,6 +288,12 @@ pub fn validate(s: &Scene) -> Check {
     }
     if c.max_iterations == 0 {
         return fail("coupling.max_iterations", "must be at least 1");
+    }
+    if !(c.mass_floor.is_finite() && (1e-4..=1.0).contains(&c.mass_floor)) {
+        return fail(
+            "coupling.mass_floor",
+            format!("must be in [1e-4, 1], got {}", c.mass_floor),
+        );
     }
     Ok(())
 }

@@ -37,6 +37,8 @@ pub struct DropletCase {
     pub face_mass: FaceMass,
     /// Velocity the constraint faces are held to.
     pub band: BandVelocity,
+    /// Smallest mass fraction of a constraint face (`coupling.mass_floor`).
+    pub mass_floor: Real,
     /// Relative elongation e along y of the l = 2 ellipsoid (volume
     /// preserving: y × (1 + e), x and z × (1 + e)^{-1/2}); 0 for a sphere.
     pub elongation: Real,
@@ -53,6 +55,7 @@ impl DropletCase {
             method: Method::Monolithic,
             face_mass: FaceMass::Sheet,
             band: BandVelocity::default(),
+            mass_floor: crate::coupling::system::MASS_FLOOR,
             elongation: 0.0,
         }
     }
@@ -102,6 +105,7 @@ impl DropletCase {
         cp.method = self.method;
         cp.face_mass = self.face_mass;
         cp.band = self.band;
+        cp.mass_floor = self.mass_floor;
         prm.coupling = Some(cp);
         let grid = MacGrid::new(prm.lo, prm.hi, dx);
         Ok((SimState::new(parts, grid, solids), prm))

@@ -33,6 +33,9 @@ pub struct AccuracyArgs {
     /// sheet's own).
     #[arg(long, value_enum, default_value_t = BandArg::Extrapolated)]
     band: BandArg,
+    /// Smallest mass fraction of a constraint face (`coupling.mass_floor`).
+    #[arg(long, default_value_t = codimfx::coupling::system::MASS_FLOOR)]
+    mass_floor: Real,
     /// Solve the coupled system with λ eliminated (the Schur form).
     #[arg(long)]
     schur: bool,
@@ -63,8 +66,8 @@ pub enum BandArg {
 pub fn run(a: AccuracyArgs) -> Result<()> {
     println!("threads: {}\n", rayon::current_num_threads());
     println!(
-        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, band {:?})\n",
-        a.surface_radius, a.face_mass, a.band
+        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, mass floor {}, band {:?})\n",
+        a.surface_radius, a.face_mass, a.mass_floor, a.band
     );
     println!(
         "| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | wall (s) |"
@@ -75,6 +78,7 @@ pub fn run(a: AccuracyArgs) -> Result<()> {
         for &cells in &a.cells {
             let case = DropletCase {
                 surface_radius: a.surface_radius,
+                mass_floor: a.mass_floor,
                 face_mass: match a.face_mass {
                     FaceMassArg::Sheet => FaceMass::Sheet,
                     FaceMassArg::LevelSet => FaceMass::LevelSet,
