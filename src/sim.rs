@@ -579,6 +579,7 @@ impl Sim {
                 iterations: s.iterations,
                 residual: s.rel_residual,
                 cells: info.pressure.cells,
+                mass_shift: info.coupling.as_ref().map_or(0.0, |c| c.mass_shift),
             });
             if let Some(v) = info.viscosity {
                 for s in v {
@@ -593,6 +594,7 @@ impl Sim {
                 rec.fallbacks.coupling_method_switches += c.method_fallbacks as u64;
                 rec.fallbacks.released_faces += c.released_faces as u64;
                 rec.fallbacks.outlier_resolves += c.outlier_rounds as u64;
+                rec.fallbacks.mass_shift_bounded += c.mass_shift_bounded as u64;
                 rec.warm_starts += (c.warm_seeded > 0) as u32;
             }
             rec.liquid_volume = info.liquid_volume;

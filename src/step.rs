@@ -204,6 +204,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
         },
         verify: false,
         face_mass: match s.coupling.face_mass {
+            crate::scene::FaceMassSetting::Balanced => coupling::FaceMass::Balanced,
             crate::scene::FaceMassSetting::Sheet => coupling::FaceMass::Sheet,
             crate::scene::FaceMassSetting::LevelSet => coupling::FaceMass::LevelSet,
         },

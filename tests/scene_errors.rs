@@ -238,6 +238,10 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
     let e = err(&format!("{GOOD}coupling:\n  max_iterations: 0\n"));
     check(&e, "coupling.max_iterations", 24, "at least 1");
     assert_eq!(s.coupling.mass_floor, 0.05);
+    assert_eq!(
+        s.coupling.face_mass,
+        codimfx::scene::FaceMassSetting::Balanced
+    );
     let e = err(&format!("{GOOD}coupling:\n  mass_floor: 0\n"));
     check(&e, "coupling.mass_floor", 24, "[1e-4, 1]");
     let e = err(&format!("{GOOD}coupling:\n  method: cg\n"));

@@ -75,7 +75,7 @@ pub fn solve(
     let sheets = &surf.nb.x[..surf.n_sheet()];
     // the grid's system and K, and beside them the particles' order in the
     // coupled system (it needs only the Laplacian's pattern)
-    let ((full, constrained, released), order) = {
+    let ((full, constrained, released, shift), order) = {
         let (grid, parts) = (&*grid, &*parts);
         rayon::join(
             || {
@@ -86,12 +86,22 @@ pub fn solve(
                 let mut constrained = faces::constraints(grid, &full, sheets);
                 constrained.floor = prm.mass_floor;
                 let released = constrained.release_enclosed(grid, &full, sheets);
-                if prm.face_mass == FaceMass::Sheet {
-                    if let Some(s) = volume_spacing(parts, prm.surface.density) {
-                        constrained.set_mass(grid, &full, prm.surface_radius * grid.dx - 0.5 * s);
+                let mut shift_used = None;
+                if let Some(s) = volume_spacing(parts, prm.surface.density) {
+                    let shift = prm.surface_radius * grid.dx - 0.5 * s;
+                    match prm.face_mass {
+                        FaceMass::Sheet => constrained.set_mass(grid, &full, shift),
+                        FaceMass::Balanced => {
+                            let target =
+                                3.0 * volume_mass(parts) / (prm.surface.density * grid.dx.powi(3));
+                            let (d, bounded) =
+                                constrained.set_mass_balanced(grid, &full, shift, target, s);
+                            shift_used = Some((d / grid.dx, bounded));
+                        }
+                        FaceMass::LevelSet => {}
                     }
                 }
-                (full, constrained, released)
+                (full, constrained, released, shift_used)
             },
             || {
                 (prm.ilu_order == IluOrder::ParticlesFirst)
@@ -100,6 +110,10 @@ pub fn solve(
             },
         )
     };
+    if let Some((d, bounded)) = shift {
+        info.mass_shift = d;
+        info.mass_shift_bounded = bounded;
+    }
     let porder = order.map_err(solve_err("coupled system order"))?;
     info.cells = full.cells.len();
     info.theta_clamps = full.theta_clamps;
@@ -309,6 +323,17 @@ fn solve_uncoupled(
 
 /// Spacing (m) of the volume particles, (m̄/ρ)^{1/3} from their mean mass;
 /// `None` without volume particles.
+/// Mass of the volume particles (kg), summed in store order.
+fn volume_mass(parts: &Particles) -> Real {
+    parts
+        .codim
+        .iter()
+        .zip(&parts.mass)
+        .filter(|(c, _)| **c == crate::particles::Codim::Volume)
+        .map(|(_, m)| m)
+        .sum()
+}
+
 fn volume_spacing(parts: &Particles, density: Real) -> Option<Real> {
     let (mut m, mut n) = (0.0, 0usize);
     for (c, mass) in parts.codim.iter().zip(&parts.mass) {

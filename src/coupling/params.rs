@@ -26,9 +26,14 @@ pub enum Method {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum FaceMass {
+    /// [`FaceMass::Sheet`] with the level set moved (by at most one volume
+    /// particle spacing) so that the grid's face masses add up to the
+    /// volume particles' mass: the coupled system's inertia is the
+    /// liquid's ([`super::faces::Constraints::set_mass_balanced`]).
+    #[default]
+    Balanced,
     /// The liquid ends at the sheet layer: the fraction below a level set
     /// half a particle spacing outside the outermost volume particles.
-    #[default]
     Sheet,
     /// The ghost-fluid fraction of the pressure solve's level set, which
     /// reaches `surface_radius` Δx past the volume particles.
@@ -131,6 +136,14 @@ pub struct CouplingInfo {
     /// Constraint faces released around interior liquid cells they enclosed
     /// ([`super::faces::Constraints::release_enclosed`]).
     pub released_faces: usize,
+    /// Shift δ/Δx of the level set that gives the constraint faces their
+    /// mass (`face_mass: balanced`; 0 otherwise).
+    #[serde(default)]
+    pub mass_shift: Real,
+    /// δ stayed at ± one particle spacing: the face masses could not be
+    /// brought to the liquid's.
+    #[serde(default)]
+    pub mass_shift_bounded: bool,
     /// Solves redone after outlier velocities, with the constraint faces
     /// of the enclosed cells around them released
     /// ([`super::release::outlier_cells`]; at most [`MAX_OUTLIER_ROUNDS`]), plus

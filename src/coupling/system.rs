@@ -50,10 +50,9 @@ use rayon::prelude::*;
 /// monolithic form's face rows divide by it: a massless face outside the
 /// sheet would make entries of size w/θ → ∞ in A and in the μ block. The
 /// reduced form uses the same bound so that both forms solve the same
-/// equations. The floor is inertia the faces outside the sheet add to it:
-/// 0.005 takes the l = 2 period at the droplet presets' R = 6.1Δx from
-/// +4.2 % to +2.8 % of Rayleigh's, at about 1.5 times the iterations in the
-/// fluid chain (`docs/decisions.md`, "The mass floor").
+/// equations. The floor is inertia the faces outside the sheet add to it,
+/// which the balanced face mass pays for with the other faces
+/// ([`super::FaceMass::Balanced`]; `docs/decisions.md`, "The mass floor").
 pub const MASS_FLOOR: Real = 0.05;
 
 /// θ_f of constraint face `f`, at least [`Constraints::floor`] (both forms

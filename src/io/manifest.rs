@@ -51,6 +51,10 @@ pub struct SubstepRecord {
     pub residual: Real,
     /// Pressure unknowns (liquid cells).
     pub cells: usize,
+    /// Shift δ/Δx of the balanced face masses' level set (0 without a
+    /// coupled solve or with another `coupling.face_mass`).
+    #[serde(default)]
+    pub mass_shift: Real,
 }
 
 /// Particle speed statistics (m/s).
@@ -93,6 +97,11 @@ pub struct Fallbacks {
     /// released (`Constraints::release_weak`).
     #[serde(default)]
     pub outlier_resolves: u64,
+    /// Coupled substeps whose balanced face masses could not be brought to
+    /// the volume particles' mass within one particle spacing of the level
+    /// set (`coupling.face_mass: balanced`; the shift stayed at its bound).
+    #[serde(default)]
+    pub mass_shift_bounded: u64,
 }
 
 /// One frame's record.

@@ -76,8 +76,10 @@ pub struct CouplingSettings {
     #[serde(default)]
     pub method: CouplingMethod,
     /// Which liquid fraction gives the constraint faces their mass:
-    /// `sheet` (the liquid ends at the sheet layer) or `level_set` (the
-    /// pressure solve's level set, which reaches past it).
+    /// `balanced` (the liquid ends at the sheet layer, moved so that the
+    /// grid carries the volume particles' mass), `sheet` (the liquid ends
+    /// at the sheet layer) or `level_set` (the pressure solve's level set,
+    /// which reaches past it).
     #[serde(default)]
     pub face_mass: FaceMassSetting,
     /// Velocity the constraint faces are held to: `extrapolated` (the
@@ -144,8 +146,11 @@ fn default_tail_fill() -> bool {
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum FaceMassSetting {
-    /// The liquid ends at the sheet layer (default).
+    /// As `sheet`, with the level set moved so that the face masses add up
+    /// to the volume particles' mass (default).
     #[default]
+    Balanced,
+    /// The liquid ends at the sheet layer.
     Sheet,
     /// The pressure solve's level set.
     LevelSet,
@@ -157,7 +162,7 @@ impl Default for CouplingSettings {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
             method: CouplingMethod::Monolithic,
-            face_mass: FaceMassSetting::Sheet,
+            face_mass: FaceMassSetting::Balanced,
             band: BandSetting::Extrapolated,
             ordering: crate::coupling::IluOrder::default(),
             face_fill: default_face_fill(),

@@ -53,7 +53,7 @@ impl DropletCase {
             dx: 0.0128 / cells,
             surface_radius: 1.0,
             method: Method::Monolithic,
-            face_mass: FaceMass::Sheet,
+            face_mass: FaceMass::Balanced,
             band: BandVelocity::default(),
             mass_floor: crate::coupling::system::MASS_FLOOR,
             elongation: 0.0,

@@ -24,9 +24,10 @@ pub struct AccuracyArgs {
     /// Level-set radius of the volume particles relative to Δx.
     #[arg(long, default_value_t = 1.0)]
     surface_radius: Real,
-    /// Mass of the constraint faces: `sheet` (the liquid ends at the sheet
-    /// layer) or `level-set`.
-    #[arg(long, value_enum, default_value_t = FaceMassArg::Sheet)]
+    /// Mass of the constraint faces: `balanced` (the liquid ends at the
+    /// sheet layer, moved so that the grid carries the volume particles'
+    /// mass), `sheet` (the liquid ends at the sheet layer) or `level-set`.
+    #[arg(long, value_enum, default_value_t = FaceMassArg::Balanced)]
     face_mass: FaceMassArg,
     /// Velocity of the constraint faces: `extrapolated` (the sheet's
     /// velocity carried to the face with its gradient) or `sheet` (the
@@ -47,6 +48,9 @@ pub struct AccuracyArgs {
 /// `--face-mass`.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 pub enum FaceMassArg {
+    /// The liquid ends at the sheet layer, moved so that the grid carries
+    /// the volume particles' mass.
+    Balanced,
     /// The liquid ends at the sheet layer.
     Sheet,
     /// The pressure solve's level set.
@@ -80,6 +84,7 @@ pub fn run(a: AccuracyArgs) -> Result<()> {
                 surface_radius: a.surface_radius,
                 mass_floor: a.mass_floor,
                 face_mass: match a.face_mass {
+                    FaceMassArg::Balanced => FaceMass::Balanced,
                     FaceMassArg::Sheet => FaceMass::Sheet,
                     FaceMassArg::LevelSet => FaceMass::LevelSet,
                 },
