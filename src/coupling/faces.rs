@@ -90,7 +90,9 @@ impl Constraints {
     /// begins: the liquid past the sheet, which the pressure solve needs for
     /// Young–Laplace, no longer joins the sheet's inertia.
     pub fn set_mass(&mut self, g: &MacGrid, sys: &Poisson, shift: Real) {
-        self.mass = self.masses(g, sys, shift);
+        let mut m = Vec::new();
+        self.masses_into(g, sys, shift, &mut m);
+        self.mass = m;
     }
 
     /// [`Constraints::set_mass`] with the shift moved by δ ∈ [−`range`, `range`]
@@ -115,39 +117,40 @@ impl Constraints {
         target: Real,
         range: Real,
     ) -> (Real, bool) {
-        let free = free_mass(g, sys, self);
-        let want = target - free;
-        let sum = |m: &[Real]| -> Real {
+        let want = target - free_mass(g, sys, self);
+        // the masses at shift + d into `m`, and their sum as the solve uses them
+        let sum_at = |d: Real, m: &mut Vec<Real>| -> Real {
+            self.masses_into(g, sys, shift + d, m);
             m.iter()
                 .zip(&self.weight)
                 .map(|(m, w)| m.max(self.floor) * w)
                 .sum()
         };
-        let (mut lo, mut hi) = (-range, range);
-        let m_lo = self.masses(g, sys, shift + lo);
-        if sum(&m_lo) <= want {
-            self.mass = m_lo;
-            return (lo, true);
-        }
-        let m_hi = self.masses(g, sys, shift + hi);
-        if sum(&m_hi) >= want {
-            self.mass = m_hi;
-            return (hi, true);
-        }
-        for _ in 0..BISECTIONS {
-            let mid = 0.5 * (lo + hi);
-            if sum(&self.masses(g, sys, shift + mid)) > want {
-                lo = mid;
-            } else {
-                hi = mid;
+        let mut m = Vec::with_capacity(self.len());
+        let found = if sum_at(-range, &mut m) <= want {
+            (-range, true)
+        } else if sum_at(range, &mut m) >= want {
+            (range, true)
+        } else {
+            let (mut lo, mut hi) = (-range, range);
+            for _ in 0..BISECTIONS {
+                let mid = 0.5 * (lo + hi);
+                if sum_at(mid, &mut m) > want {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
             }
-        }
-        let d = 0.5 * (lo + hi);
-        self.mass = self.masses(g, sys, shift + d);
-        (d, false)
+            let d = 0.5 * (lo + hi);
+            sum_at(d, &mut m);
+            (d, false)
+        };
+        self.mass = m;
+        found
     }
 
-    fn masses(&self, g: &MacGrid, sys: &Poisson, shift: Real) -> Vec<Real> {
+    /// θ_m of every constraint face for ψ = φ + `shift`, into `out`.
+    fn masses_into(&self, g: &MacGrid, sys: &Poisson, shift: Real, out: &mut Vec<Real>) {
         let psi = |t: Option<usize>| t.map_or(g.dx, |t| sys.phi[t]) + shift;
         self.faces
             .par_iter()
@@ -162,7 +165,7 @@ impl Constraints {
                     (false, true) => hi / (hi - lo),
                 }
             })
-            .collect()
+            .collect_into_vec(out);
     }
 
     /// Constraint index of face (a, s).
