@@ -87,13 +87,13 @@ pub fn solve(
                 constrained.floor = prm.mass_floor;
                 let released = constrained.release_enclosed(grid, &full, sheets);
                 let mut shift_used = None;
-                if let Some(s) = volume_spacing(parts, prm.surface.density) {
+                let totals = volume_totals(parts);
+                if let Some(s) = volume_spacing(totals, prm.surface.density) {
                     let shift = prm.surface_radius * grid.dx - 0.5 * s;
                     match prm.face_mass {
                         FaceMass::Sheet => constrained.set_mass(grid, &full, shift),
                         FaceMass::Balanced => {
-                            let target =
-                                3.0 * volume_mass(parts) / (prm.surface.density * grid.dx.powi(3));
+                            let target = 3.0 * totals.0 / (prm.surface.density * grid.dx.powi(3));
                             let (d, bounded) =
                                 constrained.set_mass_balanced(grid, &full, shift, target, s);
                             shift_used = Some((d / grid.dx, bounded));
@@ -321,20 +321,8 @@ fn solve_uncoupled(
     Ok(info)
 }
 
-/// Spacing (m) of the volume particles, (m̄/ρ)^{1/3} from their mean mass;
-/// `None` without volume particles.
-/// Mass of the volume particles (kg), summed in store order.
-fn volume_mass(parts: &Particles) -> Real {
-    parts
-        .codim
-        .iter()
-        .zip(&parts.mass)
-        .filter(|(c, _)| **c == crate::particles::Codim::Volume)
-        .map(|(_, m)| m)
-        .sum()
-}
-
-fn volume_spacing(parts: &Particles, density: Real) -> Option<Real> {
+/// Mass (kg) and number of the volume particles, summed in store order.
+fn volume_totals(parts: &Particles) -> (Real, usize) {
     let (mut m, mut n) = (0.0, 0usize);
     for (c, mass) in parts.codim.iter().zip(&parts.mass) {
         if *c == crate::particles::Codim::Volume {
@@ -342,6 +330,12 @@ fn volume_spacing(parts: &Particles, density: Real) -> Option<Real> {
             n += 1;
         }
     }
+    (m, n)
+}
+
+/// Spacing (m) of the volume particles, (m̄/ρ)^{1/3} from their mean mass
+/// (`totals` from [`volume_totals`]); `None` without volume particles.
+fn volume_spacing((m, n): (Real, usize), density: Real) -> Option<Real> {
     (n > 0 && m > 0.0).then(|| (m / n as Real / density).cbrt())
 }
 
