@@ -177,11 +177,21 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
         ilu_order: s.coupling.ordering,
         face_fill: s.coupling.face_fill,
         shared_block: s.coupling.shared_block,
-        tail_fill: s.coupling.tail_fill,
+        fill_passes: if s.coupling.tail_fill {
+            s.coupling.fill_passes as usize
+        } else {
+            0
+        },
         mass_floor: s.coupling.mass_floor,
         solver: BicgstabParams {
             tol: s.coupling.tolerance,
             max_iter: s.coupling.max_iterations as usize,
+        },
+        krylov: match s.coupling.krylov {
+            crate::scene::KrylovSetting::Gmres => coupling::Krylov::Gmres {
+                restart: s.coupling.restart as usize,
+            },
+            crate::scene::KrylovSetting::Bicgstab => coupling::Krylov::Bicgstab,
         },
         surface: SurfaceParams {
             mls: MlsParams {

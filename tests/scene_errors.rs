@@ -238,6 +238,16 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
     let e = err(&format!("{GOOD}coupling:\n  max_iterations: 0\n"));
     check(&e, "coupling.max_iterations", 24, "at least 1");
     assert_eq!(s.coupling.mass_floor, 0.05);
+    assert_eq!(s.coupling.krylov, codimfx::scene::KrylovSetting::Gmres);
+    assert_eq!(s.coupling.restart, 300);
+    assert_eq!(s.coupling.fill_passes, 2);
+    let e = err(&format!("{GOOD}coupling:\n  fill_passes: 4\n"));
+    check(&e, "coupling.fill_passes", 24, "1, 2 or 3");
+    let e = err(&format!("{GOOD}coupling:\n  restart: 0\n"));
+    check(&e, "coupling.restart", 24, "[1, 5000]");
+    let e = err(&format!("{GOOD}coupling:\n  krylov: cg\n"));
+    assert!(e.to_string().contains("unknown variant `cg`"), "{e}");
+    assert_eq!(e.path(), "coupling.krylov", "{e}");
     assert_eq!(
         s.coupling.face_mass,
         codimfx::scene::FaceMassSetting::Balanced

@@ -8,8 +8,9 @@
 //!   Laplacian of the particles (eqs. 14–17, Appendix D);
 //! - [`faces`]: the constraint faces K and the interpolation J (eq. 18);
 //! - [`system`]: eq. (24) as the paper writes it (`Method::Monolithic`), or
-//!   with λ eliminated exactly (`Method::Schur`), both solved with
-//!   BiCGSTAB + ILU(0) at the scene's tolerance (paper: 1e-9).
+//!   with λ eliminated exactly (`Method::Schur`), both solved with GMRES
+//!   (default) or the paper's BiCGSTAB ([`Krylov`]), preconditioned by an
+//!   incomplete LU, at the scene's tolerance (paper: 1e-9).
 //!
 //! Both methods give the same face velocities, pressures and particle
 //! velocities up to the solver tolerance; the reduced one is smaller (no λ
@@ -31,14 +32,17 @@ pub mod warm;
 use crate::grid::extrapolate::{constrain_solids, extrapolate};
 use crate::grid::projection::{project_liquid, Poisson};
 use crate::grid::MacGrid;
-use crate::linsolve::{bicgstab, Csr, Ilu0, Operator, Preconditioner, SolveError, TripledIlu};
+use crate::linsolve::{
+    bicgstab, gmres, Csr, GmresParams, Ilu0, Operator, Preconditioner, SolveError, TripledIlu,
+};
 use crate::math::{Real, Vec3};
 use crate::particles::Particles;
 use crate::solids::SolidSet;
 use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 pub use band::{band_correction, BAND_PROBE};
 pub use params::{
-    BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Method, MAX_OUTLIER_ROUNDS,
+    BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Krylov, Method,
+    GMRES_RESTART, MAX_OUTLIER_ROUNDS,
 };
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
@@ -410,20 +414,15 @@ fn solve_form(
     let t = Instant::now();
     let ilu: Box<dyn Preconditioner> = match &view {
         View::Shared(m) => Box::new(
-            TripledIlu::from_tripled(m, prm.tail_fill).map_err(solve_err("coupled system ILU"))?,
+            TripledIlu::from_tripled(m, prm.fill_passes)
+                .map_err(solve_err("coupled system ILU"))?,
         ),
         View::General(a) => {
             // the trailing λ and pressure rows of the particles-first order
-            let fill = prm.tail_fill
-                && form == Form::Monolithic
-                && prm.ilu_order == IluOrder::ParticlesFirst;
+            let tail = form == Form::Monolithic && prm.ilu_order == IluOrder::ParticlesFirst;
+            let passes = if tail { prm.fill_passes } else { 0 };
             Box::new(
-                if fill {
-                    Ilu0::with_tail_fill(a, sys.mo)
-                } else {
-                    Ilu0::new(a)
-                }
-                .map_err(solve_err("coupled system ILU"))?,
+                Ilu0::with_tail_fill(a, sys.mo, passes).map_err(solve_err("coupled system ILU"))?,
             )
         }
     };
@@ -444,11 +443,26 @@ fn solve_form(
             info.warm_seeded = n;
         }
     }
-    let s = bicgstab(op, &sys.rhs, &mut x, ilu.as_ref(), &prm.solver);
+    let s = match prm.krylov {
+        Krylov::Gmres { restart } => gmres(
+            op,
+            &sys.rhs,
+            &mut x,
+            ilu.as_ref(),
+            &GmresParams {
+                tol: prm.solver.tol,
+                max_iter: prm.solver.max_iter,
+                restart,
+            },
+        ),
+        Krylov::Bicgstab => bicgstab(op, &sys.rhs, &mut x, ilu.as_ref(), &prm.solver),
+    };
     info.solve_s += t.elapsed().as_secs_f64();
-    let s = s.map_err(solve_err(match form {
-        Form::Monolithic => "coupled system BiCGSTAB (monolithic)",
-        Form::Reduced => "coupled system BiCGSTAB (Schur)",
+    let s = s.map_err(solve_err(match (form, prm.krylov) {
+        (Form::Monolithic, Krylov::Gmres { .. }) => "coupled system GMRES (monolithic)",
+        (Form::Reduced, Krylov::Gmres { .. }) => "coupled system GMRES (Schur)",
+        (Form::Monolithic, Krylov::Bicgstab) => "coupled system BiCGSTAB (monolithic)",
+        (Form::Reduced, Krylov::Bicgstab) => "coupled system BiCGSTAB (Schur)",
     }))?;
     info.iterations += s.iterations;
     info.rel_residual = s.rel_residual;

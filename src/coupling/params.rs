@@ -21,6 +21,26 @@ pub enum Method {
     Schur,
 }
 
+/// The Krylov method of the coupled solve (both right-preconditioned by
+/// the same incomplete LU, to the same relative residual).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Krylov {
+    /// GMRES(m) with `restart` = m Krylov vectors per cycle
+    /// ([`crate::linsolve::gmres()`]): one product with A per iteration.
+    Gmres {
+        /// Krylov vectors kept per cycle.
+        restart: usize,
+    },
+    /// BiCGSTAB, the paper's ([`crate::linsolve::bicgstab()`]): two
+    /// products with A per iteration.
+    Bicgstab,
+}
+
+/// Default GMRES cycle length (`coupling.restart`): the droplet on a plane
+/// after the impact needs up to ~180 vectors, and GMRES(50) stalled there
+/// (`docs/decisions.md`, "Two passes of fill, and GMRES").
+pub const GMRES_RESTART: usize = 300;
+
 /// Which liquid fraction gives a constraint face its mass (eq. 19's M₍₀₎
 /// on the faces the sheet drives).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -59,8 +79,11 @@ pub enum BandVelocity {
 pub struct CouplingParams {
     /// Which system to solve.
     pub method: Method,
-    /// BiCGSTAB stopping rule (paper: 1e-9 relative).
+    /// Stopping rule (paper: 1e-9 relative); `max_iter` counts iterations
+    /// of the chosen Krylov method.
     pub solver: BicgstabParams,
+    /// Krylov method.
+    pub krylov: Krylov,
     /// Order of the monolithic system's unknowns for ILU(0).
     pub ilu_order: IluOrder,
     /// Keep the λ–λ fill of the particle rows in ILU(0)'s pattern.
@@ -68,10 +91,10 @@ pub struct CouplingParams {
     /// Store the monolithic system's particle block once for the three
     /// velocity components ([`crate::linsolve::Tripled`]; same results).
     pub shared_block: bool,
-    /// One level of fill in the λ and pressure rows of the monolithic
-    /// system's incomplete factorisation (particles-first order only;
-    /// [`crate::linsolve::Ilu0::with_tail_fill`]).
-    pub tail_fill: bool,
+    /// Passes of level-1 fill in the λ and pressure rows of the monolithic
+    /// system's incomplete factorisation (particles-first order only; 0:
+    /// ILU(0); [`crate::linsolve::Ilu0::with_tail_fill`]).
+    pub fill_passes: usize,
     /// Smallest mass fraction of a constraint face (`coupling.mass_floor`,
     /// [`super::system::MASS_FLOOR`] by default).
     pub mass_floor: Real,
@@ -111,7 +134,7 @@ pub struct CouplingInfo {
     pub unknowns: usize,
     /// Non-zeros of its matrix.
     pub nonzeros: usize,
-    /// BiCGSTAB iterations.
+    /// Krylov iterations (BiCGSTAB's take two products with A, GMRES's one).
     pub iterations: usize,
     /// True relative residual of the solved system.
     pub rel_residual: Real,
@@ -123,7 +146,7 @@ pub struct CouplingInfo {
     pub assemble_s: Real,
     /// ILU(0) factorisation (s).
     pub factor_s: Real,
-    /// BiCGSTAB (s).
+    /// Krylov solve (s).
     pub solve_s: Real,
     /// Ghost-fluid θ clamps.
     pub theta_clamps: usize,

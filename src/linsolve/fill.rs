@@ -19,6 +19,27 @@
 
 use rayon::prelude::*;
 
+/// [`with_tail_fill`] applied `passes` times, each pass to the pattern the
+/// previous one extended (0: unchanged). Pass 1 adds ILU(1)'s fill; pass 2
+/// follows the fill of pass 1 as well, so its pattern holds ILU(2)'s and
+/// entries of level 3 (level(i, c) = level(i, j) + level(j, c) + 1 with
+/// both at most 1).
+pub(super) fn with_tail_fill_passes<C: Copy + Send + Sync>(
+    ptr: &[usize],
+    col: &[C],
+    val: &[f64],
+    from: usize,
+    passes: usize,
+    at: impl Fn(C) -> usize + Sync + Copy,
+    make: impl Fn(usize) -> C + Sync + Copy,
+) -> (Vec<usize>, Vec<C>, Vec<f64>) {
+    let mut out = (ptr.to_vec(), col.to_vec(), val.to_vec());
+    for _ in 0..passes {
+        out = with_tail_fill(&out.0, &out.1, &out.2, from, at, make);
+    }
+    out
+}
+
 /// Rows in the compressed pattern `ptr`/`col` (columns sorted per row;
 /// `at` reads a stored column as an index) extended below row `from` as described
 /// in the module doc: the extended `ptr`, the extended columns (`make`
@@ -128,8 +149,57 @@ mod tests {
         // row 4: pivot 1 reaches 3 (added); pivot 2 reaches nothing through
         // row 2's own pattern (the fill (2, 3) is of level 1: not followed)
         assert_eq!(r[4], vec![(1, 12.0), (2, 13.0), (3, 0.0), (4, 14.0)]);
+        // two passes: the second follows the first one's fill
+        let (qp, qc, qv) = with_tail_fill_passes(&p, &c, &v, 2, 2, |x| x, |x| x);
+        let (tp, tc, tv) = with_tail_fill(&ep, &ec, &ev, 2, |x| x, |x| x);
+        assert_eq!((&qp, &qc, &qv), (&tp, &tc, &tv));
         // from = n: nothing changes
         let (fp, fc, fv) = with_tail_fill(&p, &c, &v, 5, |x| x, |x| x);
         assert_eq!((fp, fc, fv), (p.clone(), c.clone(), v.clone()));
+    }
+
+    /// The 5-point Laplacian of a 4 × 4 grid in natural order: ILU(1)'s
+    /// fill of row 5 (cell (1, 1)) is columns 2 and 8 (i − 4 + 1, i + 4 − 1);
+    /// the second pass adds column 3 (i − 4 + 2, level 2) through row 2's
+    /// own fill (2, 5). Column 7 (i + 4 − 2) would come through (4, 7), which
+    /// row 4 (on the grid's edge: no pivot 3) never gets.
+    #[test]
+    fn a_second_pass_follows_the_first_ones_fill() {
+        let m = 4;
+        let (mut p, mut c) = (vec![0], Vec::new());
+        for i in 0..m * m {
+            let (x, y) = (i % m, i / m);
+            let mut row = vec![i];
+            if y > 0 {
+                row.push(i - m);
+            }
+            if x > 0 {
+                row.push(i - 1);
+            }
+            if x + 1 < m {
+                row.push(i + 1);
+            }
+            if y + 1 < m {
+                row.push(i + m);
+            }
+            row.sort_unstable();
+            c.extend(row);
+            p.push(c.len());
+        }
+        let v = vec![1.0; c.len()];
+        let cols =
+            |(p, c, _): &(Vec<usize>, Vec<usize>, Vec<f64>), i: usize| c[p[i]..p[i + 1]].to_vec();
+        let one = with_tail_fill_passes(&p, &c, &v, 0, 1, |x| x, |x| x);
+        let two = with_tail_fill_passes(&p, &c, &v, 0, 2, |x| x, |x| x);
+        assert_eq!(cols(&one, 5), vec![1, 2, 4, 5, 6, 8, 9]);
+        assert_eq!(cols(&two, 5), vec![1, 2, 3, 4, 5, 6, 8, 9]);
+        // the original entries keep their values, the added ones are 0
+        let (tp, tc, tv) = &two;
+        for k in tp[5]..tp[6] {
+            let orig = [1, 4, 5, 6, 9].contains(&tc[k]);
+            assert_eq!(tv[k], if orig { 1.0 } else { 0.0 });
+        }
+        let zero = with_tail_fill_passes(&p, &c, &v, 0, 0, |x| x, |x| x);
+        assert_eq!(zero, (p, c, v));
     }
 }

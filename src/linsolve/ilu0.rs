@@ -170,15 +170,16 @@ impl Ilu0 {
         })
     }
 
-    /// ILU(0) of `a` on its pattern extended by one level of fill in the
-    /// rows and columns from `from` on ([`super::fill`]): the coupled
-    /// system's impulse and pressure rows. `from ≥ n` is [`Ilu0::new`].
-    pub fn with_tail_fill(a: &Csr, from: usize) -> Result<Ilu0, SolveError> {
-        if a.ncols != a.nrows || from >= a.nrows {
+    /// ILU(0) of `a` on its pattern extended by `passes` passes of level-1
+    /// fill in the rows and columns from `from` on ([`super::fill`]): the
+    /// coupled system's impulse and pressure rows. `from ≥ n` or no pass is
+    /// [`Ilu0::new`].
+    pub fn with_tail_fill(a: &Csr, from: usize, passes: usize) -> Result<Ilu0, SolveError> {
+        if a.ncols != a.nrows || from >= a.nrows || passes == 0 {
             return Ilu0::new(a);
         }
         let (row_ptr, col, val) =
-            super::fill::with_tail_fill(a.row_ptr, a.col, a.val, from, |c| c, |c| c);
+            super::fill::with_tail_fill_passes(a.row_ptr, a.col, a.val, from, passes, |c| c, |c| c);
         Ilu0::new(&Csr {
             nrows: a.nrows,
             ncols: a.ncols,

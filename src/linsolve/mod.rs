@@ -6,13 +6,14 @@
 //!
 //! faer supplies the sparse matrix type (`SparseRowMat<usize, f64>`) but no
 //! incomplete factorisation, so ILU(0) is written here ([`ilu0`]); the
-//! Krylov loop is [`bicgstab()`]. Matrix–vector products are parallel over
+//! Krylov loops are [`bicgstab()`] and, for the coupled system, [`gmres()`]. Matrix–vector products are parallel over
 //! rows; dot products are summed over fixed-size chunks in a fixed order, so
 //! results are bit-identical for any thread count.
 
 pub mod bicgstab;
 pub mod csr;
 mod fill;
+pub mod gmres;
 pub mod ilu0;
 pub mod order;
 pub mod tripled;
@@ -20,6 +21,7 @@ pub mod tripled_ilu;
 
 pub use bicgstab::{bicgstab, BicgstabParams};
 pub use csr::Csr;
+pub use gmres::{gmres, GmresParams};
 pub use ilu0::{Identity, Ilu0, Jacobi, Preconditioner};
 pub use order::{reverse_cuthill_mckee, split_halves};
 pub use tripled::Tripled;

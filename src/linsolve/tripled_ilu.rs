@@ -226,7 +226,7 @@ impl TripledIlu {
     #[cfg(test)]
     pub fn new(a: &super::Csr, np: usize) -> Result<Option<TripledIlu>, SolveError> {
         match Tripled::from_csr(a, np) {
-            Some(m) => TripledIlu::from_tripled(&m, false).map(Some),
+            Some(m) => TripledIlu::from_tripled(&m, 0).map(Some),
             None => Ok(None),
         }
     }
@@ -237,19 +237,21 @@ impl TripledIlu {
     /// the remaining rows as in the general format. Every entry receives
     /// the same updates in the same order as there, so the factors are
     /// the general ones, bit for bit. A zero or missing pivot is reported
-    /// with its row of the whole matrix. With `tail_fill` the λ and
-    /// pressure rows take one level of fill among their own columns first
-    /// ([`super::fill`]; as [`super::Ilu0::with_tail_fill`] from row 3·np).
-    pub fn from_tripled(m: &Tripled, tail_fill: bool) -> Result<TripledIlu, SolveError> {
+    /// with its row of the whole matrix. With `fill_passes` > 0 the λ and
+    /// pressure rows take that many passes of level-1 fill among their own
+    /// columns first ([`super::fill`]; as [`super::Ilu0::with_tail_fill`]
+    /// from row 3·np).
+    pub fn from_tripled(m: &Tripled, fill_passes: usize) -> Result<TripledIlu, SolveError> {
         let (n, np) = (m.n, m.np);
         let n3 = 3 * np;
         let filled;
-        let r = if tail_fill && n3 < n {
-            let (ptr, col, val) = super::fill::with_tail_fill(
+        let r = if fill_passes > 0 && n3 < n {
+            let (ptr, col, val) = super::fill::with_tail_fill_passes(
                 &m.rest.ptr,
                 &m.rest.col,
                 &m.rest.val,
                 n3,
+                fill_passes,
                 |c| c as usize,
                 |c| c as u32,
             );

@@ -55,7 +55,8 @@ pub enum JetPattern {
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum CouplingMethod {
-    /// The whole system at once: BiCGSTAB + ILU(0), as in the paper.
+    /// The whole system at once, preconditioned by an incomplete LU, as in
+    /// the paper.
     #[default]
     Monolithic,
     /// Schur-complement elimination of the impulses λ.
@@ -75,6 +76,15 @@ pub struct CouplingSettings {
     /// How the system is solved.
     #[serde(default)]
     pub method: CouplingMethod,
+    /// Krylov method: `gmres` (default: one product with the matrix per
+    /// iteration, the residual minimised over each cycle) or `bicgstab`
+    /// (the paper's).
+    #[serde(default)]
+    pub krylov: KrylovSetting,
+    /// GMRES cycle length: Krylov vectors kept before a restart (memory:
+    /// this many vectors of the system's size).
+    #[serde(default = "default_restart")]
+    pub restart: u32,
     /// Which liquid fraction gives the constraint faces their mass:
     /// `balanced` (the liquid ends at the sheet layer, moved so that the
     /// grid carries the volume particles' mass), `sheet` (the liquid ends
@@ -107,12 +117,32 @@ pub struct CouplingSettings {
     /// on A's pattern). Same system and tolerance; far fewer iterations.
     #[serde(default = "default_tail_fill")]
     pub tail_fill: bool,
+    /// Passes of that fill (with `tail_fill`), in [1, 3]: each pass adds
+    /// the fill that eliminating with the pattern so far creates (1: ILU(1)'s
+    /// pattern in those rows; 2, the default: it holds ILU(2)'s).
+    #[serde(default = "default_fill_passes")]
+    pub fill_passes: u32,
     /// Smallest mass fraction of a constraint face, in (0, 1]. The faces
     /// outside the sheet carry (nearly) no liquid; the floor keeps the
     /// monolithic system's face rows bounded. Smaller is more accurate
     /// (the l = 2 period) and costs iterations (`docs/decisions.md`).
     #[serde(default = "default_mass_floor")]
     pub mass_floor: f64,
+}
+
+/// `coupling.krylov`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum KrylovSetting {
+    /// Restarted GMRES (default).
+    #[default]
+    Gmres,
+    /// BiCGSTAB (the paper's).
+    Bicgstab,
+}
+
+fn default_restart() -> u32 {
+    crate::coupling::GMRES_RESTART as u32
 }
 
 fn default_mass_floor() -> f64 {
@@ -136,6 +166,10 @@ fn default_face_fill() -> bool {
 
 fn default_shared_block() -> bool {
     true
+}
+
+fn default_fill_passes() -> u32 {
+    2
 }
 
 fn default_tail_fill() -> bool {
@@ -162,12 +196,15 @@ impl Default for CouplingSettings {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
             method: CouplingMethod::Monolithic,
+            krylov: KrylovSetting::Gmres,
+            restart: default_restart(),
             face_mass: FaceMassSetting::Balanced,
             band: BandSetting::Extrapolated,
             ordering: crate::coupling::IluOrder::default(),
             face_fill: default_face_fill(),
             shared_block: default_shared_block(),
             tail_fill: default_tail_fill(),
+            fill_passes: default_fill_passes(),
             mass_floor: default_mass_floor(),
         }
     }
@@ -293,6 +330,18 @@ pub fn validate(s: &Scene) -> Check {
     }
     if c.max_iterations == 0 {
         return fail("coupling.max_iterations", "must be at least 1");
+    }
+    if !(1..=3).contains(&c.fill_passes) {
+        return fail(
+            "coupling.fill_passes",
+            format!("must be 1, 2 or 3, got {}", c.fill_passes),
+        );
+    }
+    if !(1..=5000).contains(&c.restart) {
+        return fail(
+            "coupling.restart",
+            format!("must be in [1, 5000], got {}", c.restart),
+        );
     }
     if !(c.mass_floor.is_finite() && (1e-4..=1.0).contains(&c.mass_floor)) {
         return fail(

@@ -22,6 +22,7 @@ mod validate;
 pub use films::{sample_films, FilmBody, FilmSettings, RimModulation, WindSettings};
 pub use jets::{
     BandSetting, CouplingMethod, CouplingSettings, FaceMassSetting, JetPattern, JetSettings,
+    KrylovSetting,
 };
 pub use load::{load, load_str, load_str_scaled, SceneError};
 pub use sample::{sample_bodies, SampleReport};
