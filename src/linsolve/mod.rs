@@ -59,6 +59,19 @@ pub enum SolveError {
         /// Requested tolerance.
         tol: f64,
     },
+    /// The residual stopped falling: less than halved over the last
+    /// `window` iterations (GMRES, whose residual never grows).
+    #[error("linear solver stagnated: relative residual {rel_residual:.3e} after {iterations} iterations, less than halved over the last {window} (tolerance {tol:.1e})")]
+    Stagnation {
+        /// Iterations performed.
+        iterations: usize,
+        /// Relative residual reached.
+        rel_residual: f64,
+        /// The window.
+        window: usize,
+        /// Requested tolerance.
+        tol: f64,
+    },
     /// A BiCGSTAB scalar vanished (ρ or ω); the method cannot continue.
     #[error("BiCGSTAB breakdown at iteration {iteration}: {what} = {value:.3e}")]
     Breakdown {
