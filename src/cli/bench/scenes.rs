@@ -50,7 +50,7 @@ pub fn run(a: ScenesArgs) -> Result<()> {
         "## Liquid presets at the paper's resolution: s/frame (mean of {} frames after {})\n",
         a.frames, a.skip
     );
-    println!("| preset | particles | substeps/frame | s/frame | target | MLS ops | assembly | ILU(0) | BiCGSTAB | P2G | transitions | other |");
+    println!("| preset | particles | substeps/frame | s/frame | target | MLS ops | assembly | factor | Krylov solve | P2G | transitions | other |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for name in &a.presets {
         let tmp = tempfile::tempdir()?;
