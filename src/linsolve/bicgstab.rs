@@ -34,7 +34,13 @@ fn axpy_into(out: &mut [f64], a: &[f64], s: f64, b: &[f64]) {
 
 /// r = b − A x (with `tmp` as scratch); returns ‖r‖. The recursive residual
 /// of BiCGSTAB drifts, so convergence is always confirmed with this one.
-fn true_residual(a: &dyn Operator, b: &[f64], x: &[f64], tmp: &mut [f64], r: &mut [f64]) -> f64 {
+pub(super) fn true_residual(
+    a: &dyn Operator,
+    b: &[f64],
+    x: &[f64],
+    tmp: &mut [f64],
+    r: &mut [f64],
+) -> f64 {
     a.matvec(x, tmp);
     axpy_into(r, b, -1.0, tmp);
     norm(r)
@@ -50,33 +56,13 @@ pub fn bicgstab(
     m: &dyn Preconditioner,
     prm: &BicgstabParams,
 ) -> Result<SolveInfo, SolveError> {
-    let (n, ncols) = a.dims();
-    if ncols != n || b.len() != n || x.len() != n {
-        return Err(SolveError::Dimension(format!(
-            "A {}×{}, b {}, x {}",
-            n,
-            ncols,
-            b.len(),
-            x.len()
-        )));
-    }
-    if !a.all_finite() {
-        return Err(SolveError::NonFinite("matrix"));
-    }
-    if !b.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite("right-hand side"));
-    }
-    if !x.iter().all(|v| v.is_finite()) {
-        x.iter_mut().for_each(|v| *v = 0.0);
-    }
-    let bn = norm(b);
-    if bn == 0.0 {
-        x.iter_mut().for_each(|v| *v = 0.0);
+    let n = b.len();
+    let Some(bn) = super::prepare(a, b, x)? else {
         return Ok(SolveInfo {
             iterations: 0,
             rel_residual: 0.0,
         });
-    }
+    };
     let mut r = vec![0.0; n];
     let mut tmp = vec![0.0; n];
     // ‖r‖ of the current residual and ‖r0‖ of the shadow one, kept for the
@@ -219,13 +205,13 @@ pub fn bicgstab(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::linsolve::{Csr, Identity, Ilu0, Jacobi};
     use faer::sparse::{SparseRowMat, Triplet};
 
     /// 2-D convection–diffusion on an m×m grid (non-symmetric), Dirichlet.
-    fn convdiff(m: usize, peclet: f64) -> SparseRowMat<usize, f64> {
+    pub(in crate::linsolve) fn convdiff(m: usize, peclet: f64) -> SparseRowMat<usize, f64> {
         let idx = |i: usize, j: usize| i * m + j;
         let mut t = Vec::new();
         for i in 0..m {
@@ -249,7 +235,8 @@ mod tests {
         SparseRowMat::try_new_from_triplets(m * m, m * m, &t).unwrap()
     }
 
-    fn residual(a: &Csr, b: &[f64], x: &[f64]) -> f64 {
+    /// ‖b − A x‖/‖b‖.
+    pub(in crate::linsolve) fn residual(a: &Csr, b: &[f64], x: &[f64]) -> f64 {
         let mut ax = vec![0.0; b.len()];
         a.matvec(x, &mut ax);
         let r: Vec<f64> = b.iter().zip(&ax).map(|(p, q)| p - q).collect();

@@ -34,16 +34,6 @@ pub struct GmresParams {
     pub restart: usize,
 }
 
-/// r = b − A x (with `tmp` as scratch); returns ‖r‖.
-fn residual(a: &dyn Operator, b: &[f64], x: &[f64], tmp: &mut [f64], r: &mut [f64]) -> f64 {
-    a.matvec(x, tmp);
-    r.par_iter_mut()
-        .zip(b.par_iter().zip(tmp.par_iter()))
-        .with_min_len(1024)
-        .for_each(|(r, (b, t))| *r = b - t);
-    norm(r)
-}
-
 /// y += s x.
 fn axpy(y: &mut [f64], s: f64, x: &[f64]) {
     y.par_iter_mut()
@@ -66,33 +56,13 @@ pub fn gmres(
     m: &dyn Preconditioner,
     prm: &GmresParams,
 ) -> Result<SolveInfo, SolveError> {
-    let (n, ncols) = a.dims();
-    if ncols != n || b.len() != n || x.len() != n {
-        return Err(SolveError::Dimension(format!(
-            "A {}×{}, b {}, x {}",
-            n,
-            ncols,
-            b.len(),
-            x.len()
-        )));
-    }
-    if !a.all_finite() {
-        return Err(SolveError::NonFinite("matrix"));
-    }
-    if !b.iter().all(|v| v.is_finite()) {
-        return Err(SolveError::NonFinite("right-hand side"));
-    }
-    if !x.iter().all(|v| v.is_finite()) {
-        x.iter_mut().for_each(|v| *v = 0.0);
-    }
-    let bn = norm(b);
-    if bn == 0.0 {
-        x.iter_mut().for_each(|v| *v = 0.0);
+    let n = b.len();
+    let Some(bn) = super::prepare(a, b, x)? else {
         return Ok(SolveInfo {
             iterations: 0,
             rel_residual: 0.0,
         });
-    }
+    };
     let mk = prm.restart.max(1);
     let mut tmp = vec![0.0; n];
     let mut r = vec![0.0; n];
@@ -107,7 +77,7 @@ pub fn gmres(
     let mut history: Vec<f64> = Vec::new();
     let mut stalled = false;
     loop {
-        let beta = residual(a, b, x, &mut tmp, &mut r);
+        let beta = super::bicgstab::true_residual(a, b, x, &mut tmp, &mut r);
         let res = beta / bn;
         if !res.is_finite() {
             return Err(SolveError::NonFinite("iterate"));
@@ -224,40 +194,9 @@ pub fn gmres(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linsolve::bicgstab::tests::{convdiff, residual as rel_residual};
     use crate::linsolve::{bicgstab, BicgstabParams, Csr, Identity, Ilu0};
     use faer::sparse::{SparseRowMat, Triplet};
-
-    /// Upwinded 2-D convection–diffusion on an m×m grid (non-symmetric).
-    fn convdiff(m: usize, peclet: f64) -> SparseRowMat<usize, f64> {
-        let mut t = Vec::new();
-        let id = |i: usize, j: usize| i * m + j;
-        for i in 0..m {
-            for j in 0..m {
-                let r = id(i, j);
-                t.push(Triplet::new(r, r, 4.0 + peclet));
-                if i > 0 {
-                    t.push(Triplet::new(r, id(i - 1, j), -1.0 - peclet));
-                }
-                if i + 1 < m {
-                    t.push(Triplet::new(r, id(i + 1, j), -1.0));
-                }
-                if j > 0 {
-                    t.push(Triplet::new(r, id(i, j - 1), -1.0));
-                }
-                if j + 1 < m {
-                    t.push(Triplet::new(r, id(i, j + 1), -1.0));
-                }
-            }
-        }
-        SparseRowMat::try_new_from_triplets(m * m, m * m, &t).unwrap()
-    }
-
-    fn rel_residual(a: &Csr, b: &[f64], x: &[f64]) -> f64 {
-        let mut ax = vec![0.0; b.len()];
-        a.matvec(x, &mut ax);
-        let r: Vec<f64> = b.iter().zip(&ax).map(|(b, y)| b - y).collect();
-        norm(&r) / norm(b)
-    }
 
     #[test]
     fn reaches_the_tolerance_and_agrees_with_bicgstab() {

@@ -96,6 +96,37 @@ pub enum SolveError {
     Dimension(String),
 }
 
+/// The checks both Krylov solvers start with: A square and matching b and
+/// x, A and b finite (`Err` otherwise); a non-finite start is replaced by 0.
+/// Returns ‖b‖, or `None` when b = 0 (then x = 0 is the solution, written).
+fn prepare(a: &dyn Operator, b: &[f64], x: &mut [f64]) -> Result<Option<f64>, SolveError> {
+    let (n, ncols) = a.dims();
+    if ncols != n || b.len() != n || x.len() != n {
+        return Err(SolveError::Dimension(format!(
+            "A {}×{}, b {}, x {}",
+            n,
+            ncols,
+            b.len(),
+            x.len()
+        )));
+    }
+    if !a.all_finite() {
+        return Err(SolveError::NonFinite("matrix"));
+    }
+    if !b.iter().all(|v| v.is_finite()) {
+        return Err(SolveError::NonFinite("right-hand side"));
+    }
+    if !x.iter().all(|v| v.is_finite()) {
+        x.iter_mut().for_each(|v| *v = 0.0);
+    }
+    let bn = norm(b);
+    if bn == 0.0 {
+        x.iter_mut().for_each(|v| *v = 0.0);
+        return Ok(None);
+    }
+    Ok(Some(bn))
+}
+
 /// Chunk length of the deterministic reductions.
 const CHUNK: usize = 4096;
 
