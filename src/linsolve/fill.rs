@@ -33,8 +33,11 @@ pub(super) fn with_tail_fill_passes<C: Copy + Send + Sync>(
     at: impl Fn(C) -> usize + Sync + Copy,
     make: impl Fn(usize) -> C + Sync + Copy,
 ) -> (Vec<usize>, Vec<C>, Vec<f64>) {
-    let mut out = (ptr.to_vec(), col.to_vec(), val.to_vec());
-    for _ in 0..passes {
+    if passes == 0 {
+        return (ptr.to_vec(), col.to_vec(), val.to_vec());
+    }
+    let mut out = with_tail_fill(ptr, col, val, from, at, make);
+    for _ in 1..passes {
         out = with_tail_fill(&out.0, &out.1, &out.2, from, at, make);
     }
     out
