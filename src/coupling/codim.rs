@@ -86,18 +86,13 @@ pub fn update(
     // local velocity, a PIC reset: FLIP would keep its own velocity, less
     // 5 % per substep, and a light rim particle engulfed at 60 m/s held the
     // CFL substep at 3e-5 s for 40 substeps in the fluid polygon)
-    type Scratch = (Vec<u32>, Vec<u32>, Vec<u32>);
     let changes: Vec<Vec<(u32, Codim, Option<Vec3>)>> = grid
         .cells()
         .par_iter()
         .map_init(
-            || -> Scratch { (Vec::new(), Vec::new(), Vec::new()) },
-            |(cand, sheets, row), c| {
-                cand.clear();
-                grid.gather_block(c, cand);
-                cand.sort_unstable();
-                sheets.clear();
-                sheets.extend(cand.iter().filter(|&&q| codim[q as usize] == Codim::Sheet));
+            || (Block::default(), Vec::new()),
+            |(block, row), c| {
+                block.gather(&grid, c, x, codim);
                 let mut out = Vec::new();
                 for &p in grid.members(c) {
                     let p = p as usize;
@@ -105,15 +100,21 @@ pub fn update(
                         continue;
                     }
                     if codim[p] == Codim::Volume
-                        && surrounded(p, x, codim, cand, sheets, h, prm.thin_distance)
+                        && surrounded(p, &x[p], block, h, prm.thin_distance)
                     {
                         continue;
                     }
                     // the neighbours within h, ascending (as `neighbor_lists`)
                     row.clear();
-                    row.extend(cand.iter().filter(|&&q| {
-                        q as usize != p && (x[q as usize] - x[p]).norm_squared() < h2
-                    }));
+                    let xp = x[p];
+                    row.extend(
+                        block
+                            .id
+                            .iter()
+                            .zip(&block.x)
+                            .filter(|(&q, xq)| q as usize != p && (*xq - xp).norm_squared() < h2)
+                            .map(|(&q, _)| q),
+                    );
                     let next = by_the_rules(p, parts, row, prm);
                     if next == codim[p] {
                         continue;
@@ -189,6 +190,39 @@ fn joined_velocity(p: usize, parts: &Particles, nbrs: &[u32], h: Real) -> Option
 /// [`surrounded`].
 const COVER_COS: Real = 0.866_025_403_784_438_6;
 
+/// The particles of a cell's 3 × 3 × 3 block of cells (every particle that
+/// can lie within h of one of the cell's), ascending, with their positions
+/// and codimensions side by side (read in order, not gathered per query),
+/// and the positions of its sheet particles.
+#[derive(Default)]
+struct Block {
+    id: Vec<u32>,
+    x: Vec<Vec3>,
+    codim: Vec<Codim>,
+    sheet_x: Vec<Vec3>,
+}
+
+impl Block {
+    fn gather(&mut self, grid: &CellGrid, c: &crate::neighbors::Cell, x: &[Vec3], codim: &[Codim]) {
+        self.id.clear();
+        grid.gather_block(c, &mut self.id);
+        self.id.sort_unstable();
+        self.x.clear();
+        self.x.extend(self.id.iter().map(|&q| x[q as usize]));
+        self.codim.clear();
+        self.codim
+            .extend(self.id.iter().map(|&q| codim[q as usize]));
+        self.sheet_x.clear();
+        self.sheet_x.extend(
+            self.x
+                .iter()
+                .zip(&self.codim)
+                .filter(|(_, &k)| k == Codim::Sheet)
+                .map(|(x, _)| *x),
+        );
+    }
+}
+
 /// True when volume particle `p` keeps its codimension whatever its frame:
 /// no sheet particle lies within `thin`·h/√0.75 (so the volume is not thin
 /// across it, see below), and each of the 26 directions (i, j, k) ∈ {−1, 0, 1}³ \ 0 has a volume
@@ -196,28 +230,20 @@ const COVER_COS: Real = 0.866_025_403_784_438_6;
 /// 27.57° of one of those directions (their covering radius), so every cone
 /// of half-aperture 30° + 27.57° < 60° — and so the π/3 cone of the
 /// 0→1 rule along ±b³ for any b³ — holds a volume particle: the rule finds
-/// both cones occupied. `cand` holds every particle that can lie within h
-/// (ascending), `sheets` the sheet particles among them. Stops at the first
-/// failing sheet or once all 26 directions are covered.
+/// both cones occupied. `block` holds every particle that can lie within h
+/// of p (at `xp`). Stops at the first failing sheet or once all 26
+/// directions are covered.
 ///
 /// The sheet bound: the thin rule needs sheet particles s₁, s₂ within h in
 /// the two opposite cones (so at least 60° apart seen from p) closer than
 /// `thin`·h to each other. With r₁, r₂ their distances from p and M the
 /// larger, |s₁ − s₂|² ≥ r₁² + r₂² − r₁r₂ ≥ ¾M², so both lie within
 /// `thin`·h/√0.75 of p.
-fn surrounded(
-    p: usize,
-    x: &[Vec3],
-    codim: &[Codim],
-    cand: &[u32],
-    sheets: &[u32],
-    h: Real,
-    thin: Real,
-) -> bool {
-    let xp = x[p];
+fn surrounded(p: usize, xp: &Vec3, block: &Block, h: Real, thin: Real) -> bool {
+    let xp = *xp;
     let near = thin * h / (0.75 as Real).sqrt() * (1.0 + 1e-9);
-    for &q in sheets {
-        let r = (x[q as usize] - xp).norm();
+    for xq in &block.sheet_x {
+        let r = (xq - xp).norm();
         if r > 0.0 && r < near {
             return false;
         }
@@ -227,12 +253,11 @@ fn surrounded(
     let s2 = std::f64::consts::FRAC_1_SQRT_2;
     let s3 = 1.0 / (3.0 as Real).sqrt();
     let mut mask = 0u32;
-    for &q in cand {
-        let q = q as usize;
-        if q == p || codim[q] != Codim::Volume {
+    for ((&q, xq), &kq) in block.id.iter().zip(&block.x).zip(&block.codim) {
+        if q as usize == p || kq != Codim::Volume {
             continue;
         }
-        let d = x[q] - xp;
+        let d = xq - xp;
         let r = d.norm();
         if r == 0.0 || r >= h {
             continue;
@@ -401,24 +426,16 @@ mod tests {
         assert!(ca.volume_to_sheet > 0 && ca.sheet_to_volume > 0, "{ca:?}");
         let grid = CellGrid::build(&base.x, h);
         let (mut deep, mut vol) = (0, 0);
+        let mut block = Block::default();
         for c in grid.cells() {
-            let mut cand = Vec::new();
-            grid.gather_block(c, &mut cand);
-            cand.sort_unstable();
-            let sheets: Vec<u32> = cand
-                .iter()
-                .copied()
-                .filter(|&q| base.codim[q as usize] == Codim::Sheet)
-                .collect();
+            block.gather(&grid, c, &base.x, &base.codim);
             for &p in grid.members(c) {
                 if base.codim[p as usize] == Codim::Volume {
                     vol += 1;
                     deep += surrounded(
                         p as usize,
-                        &base.x,
-                        &base.codim,
-                        &cand,
-                        &sheets,
+                        &base.x[p as usize],
+                        &block,
                         h,
                         prm.thin_distance,
                     ) as usize;

@@ -63,49 +63,52 @@ fn tail_blocks(r: &Triangle, n3: usize, seq: usize) -> Vec<usize> {
     b
 }
 
-/// Eliminates rows `rows` (≥ n3) in their columns n3.. (their particle
-/// columns are done): `vals` holds the values of entries `base..` of `r`,
-/// covering these rows and every row their pivots lie in; `rd` the
-/// diagonal entries of rows n3..; `pos` an all-unset marker of n entries
-/// (left unset). The first zero or non-finite pivot is reported.
+/// Eliminates rows `rows` (≥ n3) in their columns `lo`.. (`lo` ≥ n3; their
+/// columns before `lo` are done): `vals` holds the values of entries
+/// `base..` of `r`, covering these rows and every row their pivots lie in;
+/// `rd` the diagonal entries of rows n3..; `pos` an all-unset marker of the
+/// columns n3.. (left unset; a row's entries are marked relative to `base`,
+/// and only columns ≥ n3 are ever updated here). The first zero or
+/// non-finite pivot is reported.
+#[allow(clippy::too_many_arguments)]
 fn eliminate_tail(
     r: &Triangle,
     rd: &[usize],
     n3: usize,
+    lo: usize,
     rows: std::ops::Range<usize>,
     vals: &mut [f64],
     base: usize,
-    pos: &mut [usize],
+    pos: &mut [u32],
 ) -> Result<(), SolveError> {
     for i in rows {
         let row = r.ptr[i]..r.ptr[i + 1];
-        for k in row.clone() {
-            pos[r.col[k] as usize] = k;
+        // the row's entries in columns n3.. (its particle entries come first)
+        let tail = row.start + r.col[row.clone()].partition_point(|&c| (c as usize) < n3)..row.end;
+        for k in tail.clone() {
+            pos[r.col[k] as usize - n3] = (k - base) as u32;
         }
-        for k in row.clone() {
+        for k in tail.clone() {
             let c = r.col[k] as usize;
             if c >= i {
                 break;
             }
-            if c >= n3 {
+            if c >= lo {
                 let l = vals[k - base] / vals[rd[c - n3] - base];
                 vals[k - base] = l;
                 for kk in rd[c - n3] + 1..r.ptr[c + 1] {
-                    let q = pos[r.col[kk] as usize];
-                    if q != usize::MAX {
-                        vals[q - base] -= l * vals[kk - base];
+                    let q = pos[r.col[kk] as usize - n3];
+                    if q != u32::MAX {
+                        vals[q as usize] -= l * vals[kk - base];
                     }
                 }
             }
         }
-        for k in row {
-            pos[r.col[k] as usize] = usize::MAX;
+        for k in tail {
+            pos[r.col[k] as usize - n3] = u32::MAX;
         }
         let dv = vals[rd[i - n3] - base];
         if dv == 0.0 || !dv.is_finite() {
-            for kk in r.ptr[i]..r.ptr[i + 1] {
-                pos[r.col[kk] as usize] = usize::MAX;
-            }
             return Err(SolveError::ZeroPivot { row: i });
         }
     }
@@ -220,6 +223,32 @@ fn eliminate(
     Ok(())
 }
 
+/// The entries `rows(i)` of rows `0..nr` of `t`, with the values `v`, as a
+/// new triangle.
+fn pick(
+    t: &Triangle,
+    v: &[f64],
+    rows: impl Fn(usize) -> std::ops::Range<usize>,
+    nr: usize,
+) -> Triangle {
+    let mut ptr = Vec::with_capacity(nr + 1);
+    ptr.push(0);
+    for i in 0..nr {
+        ptr.push(ptr[i] + rows(i).len());
+    }
+    let mut out = Triangle {
+        col: Vec::with_capacity(ptr[nr]),
+        val: Vec::with_capacity(ptr[nr]),
+        ptr,
+    };
+    for i in 0..nr {
+        let k = rows(i);
+        out.col.extend_from_slice(&t.col[k.clone()]);
+        out.val.extend_from_slice(&v[k]);
+    }
+    out
+}
+
 impl TripledIlu {
     /// Factorises `a` and stores it shared; `Ok(None)` when `a` does not
     /// have the structure (see `Tripled::from_csr`; tests only).
@@ -245,6 +274,9 @@ impl TripledIlu {
         let (n, np) = (m.n, m.np);
         let n3 = 3 * np;
         let filled;
+        // the values being factorised: the filled pattern's own (a fresh
+        // copy), or a copy of `m`'s
+        let mut rv;
         let r = if fill_passes > 0 && n3 < n {
             let (ptr, col, val) = super::fill::with_tail_fill_passes(
                 &m.rest.ptr,
@@ -255,14 +287,19 @@ impl TripledIlu {
                 |c| c as usize,
                 |c| c as u32,
             );
-            filled = Triangle { ptr, col, val };
+            rv = val;
+            filled = Triangle {
+                ptr,
+                col,
+                val: Vec::new(),
+            };
             &filled
         } else {
+            rv = m.rest.val.clone();
             &m.rest
         };
         let p = &m.p;
         let mut pv = p.val.clone();
-        let mut rv = r.val.clone();
         // (rows are sorted: the elimination below relies on it too)
         let find = |t: &Triangle, i: usize, c: usize| {
             let row = t.ptr[i]..t.ptr[i + 1];
@@ -376,8 +413,10 @@ impl TripledIlu {
                 .into_par_iter()
                 .zip(blocks.par_windows(2))
                 .map_init(
-                    || vec![usize::MAX; n],
-                    |pos, (vals, w)| eliminate_tail(r, &rd, n3, w[0]..w[1], vals, r.ptr[w[0]], pos),
+                    || vec![u32::MAX; n - n3],
+                    |pos, (vals, w)| {
+                        eliminate_tail(r, &rd, n3, n3, w[0]..w[1], vals, r.ptr[w[0]], pos)
+                    },
                 )
                 .collect();
             // the first failing row, as the sequential pass would report it
@@ -385,23 +424,67 @@ impl TripledIlu {
                 return Err(e);
             }
         }
-        eliminate_tail(r, &rd, n3, seq..n, &mut rv, 0, &mut pos)?;
-        let pick =
-            |t: &Triangle, v: &[f64], rows: &dyn Fn(usize) -> std::ops::Range<usize>, nr: usize| {
-                let mut out = Triangle {
-                    ptr: vec![0],
-                    col: Vec::new(),
-                    val: Vec::new(),
-                };
-                for i in 0..nr {
-                    for k in rows(i) {
-                        out.col.push(t.col[k]);
-                        out.val.push(v[k]);
+        // the pressure rows' pivots in the impulse columns (final now): the
+        // rows are independent there, so in parallel chunks; then their
+        // pivots in each other's columns, in order
+        {
+            let (head, tail) = rv.split_at_mut(r.ptr[seq]);
+            let head = &*head;
+            let chunks = tail_chunks(seq, n);
+            let mut parts: Vec<(usize, &mut [f64])> = Vec::with_capacity(chunks.len());
+            let mut left = tail;
+            for w in chunks.windows(2) {
+                let (a, b) = left.split_at_mut(r.ptr[w[1]] - r.ptr[w[0]]);
+                parts.push((w[0], a));
+                left = b;
+            }
+            let rd = &rd;
+            parts
+                .into_par_iter()
+                .zip(chunks.par_windows(2))
+                .for_each(|((first, vals), w)| {
+                    let base = r.ptr[first];
+                    let mut pos = vec![u32::MAX; n - n3];
+                    for i in w[0]..w[1] {
+                        // its entries in columns n3.. (the assembly's
+                        // pressure rows have no others)
+                        let row = r.ptr[i]..r.ptr[i + 1];
+                        let row = row.start
+                            + r.col[row.clone()].partition_point(|&c| (c as usize) < n3)
+                            ..row.end;
+                        for k in row.clone() {
+                            pos[r.col[k] as usize - n3] = (k - base) as u32;
+                        }
+                        for k in row.clone() {
+                            let c = r.col[k] as usize;
+                            if c >= seq {
+                                break;
+                            }
+                            let l = vals[k - base] / head[rd[c - n3]];
+                            vals[k - base] = l;
+                            for kk in rd[c - n3] + 1..r.ptr[c + 1] {
+                                let q = pos[r.col[kk] as usize - n3];
+                                if q != u32::MAX {
+                                    vals[q as usize] -= l * head[kk];
+                                }
+                            }
+                        }
+                        for k in row {
+                            pos[r.col[k] as usize - n3] = u32::MAX;
+                        }
                     }
-                    out.ptr.push(out.col.len());
-                }
-                out
-            };
+                });
+        }
+        eliminate_tail(
+            r,
+            &rd,
+            n3,
+            seq,
+            seq..n,
+            &mut rv,
+            0,
+            &mut vec![u32::MAX; n - n3],
+        )?;
         let tail_l = |i: usize| if i < n3 { 0..0 } else { r.ptr[i]..rd[i - n3] };
         let tail_u = |i: usize| {
             if i < n3 {
@@ -410,7 +493,16 @@ impl TripledIlu {
                 rd[i - n3] + 1..r.ptr[i + 1]
             }
         };
-        let lt = pick(r, &rv, &tail_l, n);
+        // the four triangles are copied out side by side
+        let ((lt, ut), (lp, up)) = rayon::join(
+            || rayon::join(|| pick(r, &rv, tail_l, n), || pick(r, &rv, tail_u, n)),
+            || {
+                rayon::join(
+                    || pick(p, &pv, |s| p.ptr[s]..pd[s], np),
+                    || pick(p, &pv, |s| pd[s] + 1..p.ptr[s + 1], np),
+                )
+            },
+        );
         let lt_mid = (n3..n)
             .map(|i| {
                 let row = lt.ptr[i]..lt.ptr[i + 1];
@@ -421,12 +513,12 @@ impl TripledIlu {
             n,
             np,
             halves: m.halves,
-            lp: pick(p, &pv, &|s| p.ptr[s]..pd[s], np),
-            up: pick(p, &pv, &|s| pd[s] + 1..p.ptr[s + 1], np),
+            lp,
+            up,
             dp: pd.iter().map(|&k| pv[k]).collect(),
             lt,
             lt_mid,
-            ut: pick(r, &rv, &tail_u, n),
+            ut,
             dt: rd.iter().map(|&k| rv[k]).collect(),
             blocks,
         })
