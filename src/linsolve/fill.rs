@@ -86,9 +86,12 @@ pub(super) fn with_tail_fill<C: Copy + Send + Sync>(
                     if j < pivots_from {
                         continue;
                     }
-                    for &cj in &col[ptr[j]..ptr[j + 1]] {
+                    // row j's entries right of its diagonal and from `from` on
+                    let rj = &col[ptr[j]..ptr[j + 1]];
+                    let lo = j.max(from.saturating_sub(1));
+                    for &cj in &rj[rj.partition_point(|&c| at(c) <= lo)..] {
                         let c = at(cj);
-                        if c > j && c >= from && mark[c] != stamp {
+                        if mark[c] != stamp {
                             mark[c] = stamp;
                             cand.push(c);
                         }

@@ -161,7 +161,7 @@ pub struct TripledIlu {
 /// (Saad, Alg. 10.4): `pv` holds P's values from entry `pv.1` on, `rv` the
 /// rest's from entry `rv.1` on, and together they cover these rows and
 /// every row their pivots lie in. `pos` is an all-unset marker of n
-/// entries (left unset).
+/// entries (left unset; entries are marked relative to `pv.1` and `rv.1`).
 fn eliminate(
     p: &Triangle,
     r: &Triangle,
@@ -169,12 +169,12 @@ fn eliminate(
     rows: std::ops::Range<usize>,
     (pv, po): (&mut [f64], usize),
     (rv, ro): (&mut [f64], usize),
-    pos: &mut [usize],
+    pos: &mut [u32],
 ) -> Result<(), SolveError> {
     for s in rows {
         let row = p.ptr[s]..p.ptr[s + 1];
         for k in row.clone() {
-            pos[p.col[k] as usize] = k;
+            pos[p.col[k] as usize] = (k - po) as u32;
         }
         for k in row.clone() {
             let j = p.col[k] as usize;
@@ -185,13 +185,13 @@ fn eliminate(
             pv[k - po] = l;
             for kk in pd[j] + 1..p.ptr[j + 1] {
                 let q = pos[p.col[kk] as usize];
-                if q != usize::MAX {
-                    pv[q - po] -= l * pv[kk - po];
+                if q != u32::MAX {
+                    pv[q as usize] -= l * pv[kk - po];
                 }
             }
         }
         for k in row.clone() {
-            pos[p.col[k] as usize] = usize::MAX;
+            pos[p.col[k] as usize] = u32::MAX;
         }
         let dv = pv[pd[s] - po];
         if dv == 0.0 || !dv.is_finite() {
@@ -200,7 +200,7 @@ fn eliminate(
         for d in 0..3 {
             let i = 3 * s + d;
             for k in r.ptr[i]..r.ptr[i + 1] {
-                pos[r.col[k] as usize] = k;
+                pos[r.col[k] as usize] = (k - ro) as u32;
             }
             for k in row.clone() {
                 let j = p.col[k] as usize;
@@ -210,13 +210,13 @@ fn eliminate(
                 let (l, c) = (pv[k - po], 3 * j + d);
                 for kk in r.ptr[c]..r.ptr[c + 1] {
                     let q = pos[r.col[kk] as usize];
-                    if q != usize::MAX {
-                        rv[q - ro] -= l * rv[kk - ro];
+                    if q != u32::MAX {
+                        rv[q as usize] -= l * rv[kk - ro];
                     }
                 }
             }
             for k in r.ptr[i]..r.ptr[i + 1] {
-                pos[r.col[k] as usize] = usize::MAX;
+                pos[r.col[k] as usize] = u32::MAX;
             }
         }
     }
@@ -326,7 +326,7 @@ impl TripledIlu {
             let (rab, _) = rv.split_at_mut(r.ptr[3 * hb]);
             let (ra, rb) = rab.split_at_mut(r.ptr[3 * ha]);
             let (fa, fb) = rayon::join(
-                || eliminate(p, r, &pd, 0..ha, (pa, 0), (ra, 0), &mut vec![usize::MAX; n]),
+                || eliminate(p, r, &pd, 0..ha, (pa, 0), (ra, 0), &mut vec![u32::MAX; n]),
                 || {
                     let (po, ro) = (p.ptr[ha], r.ptr[3 * ha]);
                     eliminate(
@@ -336,14 +336,14 @@ impl TripledIlu {
                         ha..hb,
                         (pb, po),
                         (rb, ro),
-                        &mut vec![usize::MAX; n],
+                        &mut vec![u32::MAX; n],
                     )
                 },
             );
             fa?;
             fb?;
         }
-        let mut pos = vec![usize::MAX; n];
+        let mut pos = vec![u32::MAX; n];
         eliminate(p, r, &pd, hb..np, (&mut pv, 0), (&mut rv, 0), &mut pos)?;
         // the other rows: first their pivots in particle columns, whose rows
         // are final now, so these rows are independent (in parallel chunks,
@@ -367,11 +367,11 @@ impl TripledIlu {
                 .zip(chunks.par_windows(2))
                 .for_each(|((first, vals), w)| {
                     let base = r.ptr[first];
-                    let mut pos = vec![usize::MAX; n];
+                    let mut pos = vec![u32::MAX; n];
                     for i in w[0]..w[1] {
                         let row = r.ptr[i]..r.ptr[i + 1];
                         for k in row.clone() {
-                            pos[r.col[k] as usize] = k - base;
+                            pos[r.col[k] as usize] = (k - base) as u32;
                         }
                         for k in row.clone() {
                             let c = r.col[k] as usize;
@@ -383,20 +383,20 @@ impl TripledIlu {
                             vals[k - base] = l;
                             for kk in pd[s] + 1..p.ptr[s + 1] {
                                 let q = pos[3 * p.col[kk] as usize + d];
-                                if q != usize::MAX {
-                                    vals[q] -= l * pv[kk];
+                                if q != u32::MAX {
+                                    vals[q as usize] -= l * pv[kk];
                                 }
                             }
                             // the particle row's λ/pressure entries
                             for kk in r.ptr[c]..r.ptr[c + 1] {
                                 let q = pos[r.col[kk] as usize];
-                                if q != usize::MAX {
-                                    vals[q] -= l * head[kk];
+                                if q != u32::MAX {
+                                    vals[q as usize] -= l * head[kk];
                                 }
                             }
                         }
                         for k in row {
-                            pos[r.col[k] as usize] = usize::MAX;
+                            pos[r.col[k] as usize] = u32::MAX;
                         }
                     }
                 });
