@@ -43,7 +43,7 @@ fn table1(name: &str) -> Option<Table1Row> {
         n if n.starts_with("dripping") => ([64, 200, 64], None),
         "fluid_chain" | "fluid_chain_fast" => ([96, 256, 96], None),
         "waterbell" => ([192, 192, 192], None),
-        "polygon" | "polygon8" | "polygon_fast" => ([192, 72, 192], None),
+        "polygon" | "polygon8" | "polygon_fast" | "polygon8_fast" => ([192, 72, 192], None),
         _ => return None,
     };
     Some((res, counts))
@@ -124,7 +124,12 @@ fn every_preset_loads_and_samples_with_the_papers_resolution_and_counts() {
 
 #[test]
 fn the_polygon_presets_modulate_the_rim_with_6_and_8_corners() {
-    for (f, k) in [("presets/polygon.yaml", 6), ("presets/polygon8.yaml", 8)] {
+    for (f, k) in [
+        ("presets/polygon.yaml", 6),
+        ("presets/polygon8.yaml", 8),
+        ("presets/polygon_fast.yaml", 6),
+        ("presets/polygon8_fast.yaml", 8),
+    ] {
         let s = load(Path::new(f)).unwrap();
         let m = s.film.rim_modulation.as_ref().unwrap();
         assert_eq!(m.corners, k);
