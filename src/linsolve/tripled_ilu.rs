@@ -115,6 +115,28 @@ fn eliminate_tail(
     Ok(())
 }
 
+/// The values `rv` of `r`'s entries split at row `from`: those of the rows
+/// before it (read-only), and those of rows `from..` in the chunks of
+/// [`tail_chunks`], each with its first row; and the chunks' boundaries.
+#[allow(clippy::type_complexity)]
+fn split_rows_from<'a>(
+    rv: &'a mut [f64],
+    r: &Triangle,
+    from: usize,
+) -> (&'a [f64], Vec<(usize, &'a mut [f64])>, Vec<usize>) {
+    let n = r.ptr.len() - 1;
+    let (head, tail) = rv.split_at_mut(r.ptr[from]);
+    let chunks = tail_chunks(from, n);
+    let mut parts = Vec::with_capacity(chunks.len());
+    let mut left = tail;
+    for w in chunks.windows(2) {
+        let (a, b) = left.split_at_mut(r.ptr[w[1]] - r.ptr[w[0]]);
+        parts.push((w[0], a));
+        left = b;
+    }
+    (head, parts, chunks)
+}
+
 /// Splits `v` (whose element 0 is index `off`) at the given increasing
 /// indices (≥ off) into consecutive mutable pieces.
 fn split_at_many<'a, T>(mut v: &'a mut [T], off: usize, at: &[usize]) -> Vec<&'a mut [T]> {
@@ -351,17 +373,8 @@ impl TripledIlu {
         // other's columns. Particle columns come first in every row, so each
         // entry receives the same updates in the same order as in one pass.
         {
-            let (head, tail) = rv.split_at_mut(r.ptr[n3]);
-            let head = &*head;
+            let (head, parts, chunks) = split_rows_from(&mut rv, r, n3);
             let pv = &pv;
-            let chunks = tail_chunks(n3, n);
-            let mut parts: Vec<(usize, &mut [f64])> = Vec::with_capacity(chunks.len());
-            let mut left = tail;
-            for w in chunks.windows(2) {
-                let (a, b) = left.split_at_mut(r.ptr[w[1]] - r.ptr[w[0]]);
-                parts.push((w[0], a));
-                left = b;
-            }
             parts
                 .into_par_iter()
                 .zip(chunks.par_windows(2))
@@ -428,16 +441,7 @@ impl TripledIlu {
         // rows are independent there, so in parallel chunks; then their
         // pivots in each other's columns, in order
         {
-            let (head, tail) = rv.split_at_mut(r.ptr[seq]);
-            let head = &*head;
-            let chunks = tail_chunks(seq, n);
-            let mut parts: Vec<(usize, &mut [f64])> = Vec::with_capacity(chunks.len());
-            let mut left = tail;
-            for w in chunks.windows(2) {
-                let (a, b) = left.split_at_mut(r.ptr[w[1]] - r.ptr[w[0]]);
-                parts.push((w[0], a));
-                left = b;
-            }
+            let (head, parts, chunks) = split_rows_from(&mut rv, r, seq);
             let rd = &rd;
             parts
                 .into_par_iter()
