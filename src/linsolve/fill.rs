@@ -49,7 +49,9 @@ pub(super) fn with_tail_fill_passes<C: Copy + Send + Sync>(
 /// `at` reads a stored column as an index) extended below row `from` as described
 /// in the module doc: the extended `ptr`, the extended columns (`make`
 /// builds one) and the values, where `val` is the original values and the
-/// added entries are 0. Rows before `from` are copied unchanged.
+/// added entries are 0. Rows before `from` are copied unchanged. Pivots
+/// (columns j < i of row i) left of `pivots_from` are not followed: 0 for
+/// a first pass, `from` for a later one ([`with_tail_fill_passes`]).
 pub(super) fn with_tail_fill<C: Copy + Send + Sync>(
     ptr: &[usize],
     col: &[C],
