@@ -202,11 +202,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             density: s.physics.density,
             viscosity: s.physics.viscosity,
             bud_angle: std::f64::consts::PI / 6.0,
-            rim_modulation: s
-                .film
-                .rim_modulation
-                .as_ref()
-                .map(|m| (m.corners, m.amplitude, Vec3::from(m.center))),
+            rim_modulation: s.film.rim_modulation.as_ref().map(|m| m.sawtooth()),
         },
         pressure: PcgParams {
             tolerance: s.solver.pressure_tolerance,

@@ -141,13 +141,29 @@ pub fn bud_force(
 }
 
 /// Saw-tooth modulation of the rim tension for the fluid polygon (§10.2):
-/// 1 + a·(2·frac(k·φ/2π) − 1) for yaw angle φ of the particle around the
-/// vertical axis through `centre`, with `corners` = k teeth and amplitude a.
-pub fn sawtooth(x: &Vec3, centre: &Vec3, corners: u32, amplitude: Real) -> Real {
-    let d = x - centre;
-    let phi = d.z.atan2(d.x); // yaw about the y (vertical) axis
-    let t = (corners as Real * phi / (2.0 * std::f64::consts::PI)).rem_euclid(1.0);
-    1.0 + amplitude * (2.0 * t - 1.0)
+/// 1 + a·(2·frac(k·(φ − φ₀)/2π) − 1) for the yaw angle φ of a particle
+/// around the vertical axis through `centre`, with k teeth, amplitude a and
+/// the teeth turned by φ₀ (their drops at φ₀ + 2πj/k).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sawtooth {
+    /// Number of teeth k.
+    pub corners: u32,
+    /// Amplitude a, in [0, 1).
+    pub amplitude: Real,
+    /// A point of the vertical axis (m).
+    pub centre: Vec3,
+    /// Turn φ₀ of the teeth about the axis (rad).
+    pub phase: Real,
+}
+
+impl Sawtooth {
+    /// The factor on the rim tension at `x`.
+    pub fn at(&self, x: &Vec3) -> Real {
+        let d = x - self.centre;
+        let phi = d.z.atan2(d.x) - self.phase; // yaw about the y (vertical) axis
+        let t = (self.corners as Real * phi / (2.0 * std::f64::consts::PI)).rem_euclid(1.0);
+        1.0 + self.amplitude * (2.0 * t - 1.0)
+    }
 }
 
 /// Inputs of the semi-implicit solve, all indexed on the joint sheet+filament
@@ -521,13 +537,18 @@ mod tests {
 
     #[test]
     fn sawtooth_has_k_teeth_and_mean_one() {
-        let c = Vec3::zeros();
         let k = 6;
+        let saw = Sawtooth {
+            corners: k,
+            amplitude: 0.4,
+            centre: Vec3::zeros(),
+            phase: 0.0,
+        };
         let n = 6000;
         let vals: Vec<Real> = (0..n)
             .map(|i| {
                 let t = 2.0 * std::f64::consts::PI * (i as Real + 0.5) / n as Real;
-                sawtooth(&Vec3::new(t.cos(), 0.3, t.sin()), &c, k, 0.4)
+                saw.at(&Vec3::new(t.cos(), 0.3, t.sin()))
             })
             .collect();
         let mean = vals.iter().sum::<Real>() / n as Real;
@@ -537,6 +558,28 @@ mod tests {
             .count();
         assert_eq!(jumps, k as usize);
         assert!(vals.iter().all(|v| (0.6 - 1e-9..=1.4 + 1e-9).contains(v)));
+    }
+
+    #[test]
+    fn sawtooth_phase_turns_the_teeth() {
+        let saw = |phase: Real| Sawtooth {
+            corners: 6,
+            amplitude: 0.9,
+            centre: Vec3::new(0.2, 0.0, 0.2),
+            phase,
+        };
+        let turn = 0.3;
+        for i in 0..100 {
+            let t = 0.0628 * i as Real;
+            let at = |a: Real| Vec3::new(0.2 + a.cos(), 0.1, 0.2 + a.sin());
+            let (a, b) = (saw(0.0).at(&at(t)), saw(turn).at(&at(t + turn)));
+            assert!((a - b).abs() < 1e-12, "{t}: {a} vs {b}");
+        }
+        // the drops sit at the phase: just before it the factor is 1 + a, after it 1 − a
+        let s = saw(turn);
+        let at = |a: Real| Vec3::new(0.2 + a.cos(), 0.1, 0.2 + a.sin());
+        assert!((s.at(&at(turn - 1e-9)) - 1.9).abs() < 1e-6);
+        assert!((s.at(&at(turn + 1e-9)) - 0.1).abs() < 1e-6);
     }
 
     #[test]

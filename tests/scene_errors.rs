@@ -219,6 +219,17 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
         rim.replace("amplitude: 0.5", "amplitude: 1.2")
     ));
     check(&e, "film.rim_modulation.amplitude", 26, "1.2");
+    // the teeth's turn: degrees, default 0
+    assert_eq!(s.film.rim_modulation.as_ref().unwrap().phase, 0.0);
+    let s = load_str(
+        &format!("{GOOD}{rim}    phase: 30\n"),
+        Path::new("scene.yaml"),
+    )
+    .unwrap();
+    let saw = s.film.rim_modulation.as_ref().unwrap().sawtooth();
+    assert!((saw.phase - std::f64::consts::PI / 6.0).abs() < 1e-15);
+    let e = err(&format!("{GOOD}{rim}    phase: .nan\n"));
+    check(&e, "film.rim_modulation.phase", 28, "finite");
     // coupling: defaults and bad values
     let s = load_str(GOOD, Path::new("scene.yaml")).unwrap();
     assert_eq!(s.coupling.tolerance, 1e-9);

@@ -19,7 +19,7 @@ use crate::mls::operators::{par_frames, Neighborhoods};
 use crate::mls::{FitStats, Frame, JointLaplacian, MlsError, MlsParams};
 use crate::neighbors::CellGrid;
 use crate::particles::{Codim, Particles};
-use crate::tension::{bud_force, filament_role, rim_force, sawtooth, FilamentRole};
+use crate::tension::{bud_force, filament_role, rim_force, FilamentRole, Sawtooth};
 use faer::sparse::SparseRowMat;
 use rayon::prelude::*;
 
@@ -37,8 +37,8 @@ pub struct SurfaceParams {
     pub viscosity: Real,
     /// Half-aperture of the bud cone test (rad).
     pub bud_angle: Real,
-    /// Rim tension modulation (fluid polygon, §10.2): teeth, amplitude, centre.
-    pub rim_modulation: Option<(u32, Real, Vec3)>,
+    /// Rim tension modulation (fluid polygon, §10.2).
+    pub rim_modulation: Option<Sawtooth>,
 }
 
 /// Counts of the particle side.
@@ -208,9 +208,7 @@ pub fn particle_terms(
             let a = filament_areas(r, l);
             let (area, force, class) = match role {
                 FilamentRole::Rim => {
-                    let md = prm
-                        .rim_modulation
-                        .map_or(1.0, |(k, amp, c)| sawtooth(&nb.x[i], &c, k, amp));
+                    let md = prm.rim_modulation.map_or(1.0, |s| s.at(&nb.x[i]));
                     let f = rim_force(i, axes, &nb.x, &codim, nbrs, prm.sigma, a.rim, r, md);
                     (a.rim_filament, f, 2)
                 }

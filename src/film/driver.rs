@@ -55,10 +55,7 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
         max_iter: f.solver_max_iterations,
     };
     prm.max_speed = f.max_speed;
-    prm.rim_modulation = f
-        .rim_modulation
-        .as_ref()
-        .map(|m| (m.corners, m.amplitude, Vec3::from(m.center)));
+    prm.rim_modulation = f.rim_modulation.as_ref().map(|m| m.sawtooth());
     prm
 }
 

@@ -67,8 +67,8 @@ pub struct FilmParams {
     /// point when it has no neighbour at all (counted as sheet → filament,
     /// plus filament → point).
     pub sheet_line_ratio: Real,
-    /// Rim tension modulation (fluid polygon): corners and amplitude about the vertical axis through `centre`.
-    pub rim_modulation: Option<(u32, Real, Vec3)>,
+    /// Rim tension modulation (fluid polygon, §10.2).
+    pub rim_modulation: Option<crate::tension::Sawtooth>,
     /// Speed limit (m/s) applied after each substep of a scene, counted
     /// (`fallbacks.speed_clamps`); 0 for none.
     pub max_speed: Real,

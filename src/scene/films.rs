@@ -99,6 +99,22 @@ pub struct RimModulation {
     pub amplitude: f64,
     /// Point on the vertical axis of the yaw angle (m).
     pub center: [f64; 3],
+    /// Turn of the teeth about the axis (degrees); the drops of the tooth
+    /// function sit at `phase` + j·360°/k.
+    #[serde(default)]
+    pub phase: f64,
+}
+
+impl RimModulation {
+    /// The solver's saw-tooth.
+    pub fn sawtooth(&self) -> crate::tension::Sawtooth {
+        crate::tension::Sawtooth {
+            corners: self.corners,
+            amplitude: self.amplitude,
+            centre: self.center.into(),
+            phase: self.phase.to_radians(),
+        }
+    }
 }
 
 /// Settings of the sheet/filament solver.
@@ -348,6 +364,12 @@ pub fn validate(s: &Scene) -> Check {
             return fail(
                 "film.rim_modulation.center",
                 format!("{:?} is not finite", m.center),
+            );
+        }
+        if !m.phase.is_finite() {
+            return fail(
+                "film.rim_modulation.phase",
+                format!("must be finite, got {}", m.phase),
             );
         }
     }
