@@ -88,8 +88,9 @@ pub struct WindSettings {
 }
 
 /// Saw-tooth modulation of the rim tension for the fluid polygon (§10.2,
-/// Fig. 16): the rim tension is multiplied by 1 + a·(2·frac(k·φ/2π) − 1), φ
-/// the yaw angle of the particle about the vertical (y) axis through `center`.
+/// Fig. 16): the rim tension is multiplied by 1 + a·(2·frac(k·(φ − φ₀)/2π) − 1),
+/// φ the yaw angle of the particle about the vertical (y) axis through
+/// `center` and φ₀ the `phase`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RimModulation {
