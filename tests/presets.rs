@@ -134,9 +134,10 @@ fn the_polygon_presets_modulate_the_rim_with_6_and_8_corners() {
         let m = s.film.rim_modulation.as_ref().unwrap();
         assert_eq!(m.corners, k);
         let prm = codimfx::film::driver::params_from_scene(&s);
-        let (kk, a, c) = prm.rim_modulation.unwrap();
-        assert_eq!((kk, a), (k, m.amplitude));
-        assert_eq!(c, codimfx::math::Vec3::from(m.center));
+        let saw = prm.rim_modulation.unwrap();
+        assert_eq!((saw.corners, saw.amplitude), (k, m.amplitude));
+        assert_eq!(saw.centre, codimfx::math::Vec3::from(m.center));
+        assert_eq!(saw.phase, 0.0);
     }
 }
 
