@@ -6,8 +6,11 @@
 //! bin is the largest horizontal distance from the axis in it (an empty bin
 //! takes the mean of the others). The amplitude of mode k is
 //! |2/N Σ_b R_b e^{−ikφ_b}|, so a radius R̄ + A cos(kφ) has amplitude A in
-//! mode k. Points (droplets) and volume particles are left out: droplets
-//! flung from the corners are not the outline.
+//! mode k. Its crest, the yaw φ_k of a maximum of A cos(k(φ − φ_k)), is
+//! arg(Σ_b R_b e^{ikφ_b})/k, reported in [0°, 360°/k): where the corners
+//! (k ≥ 3) or the long axis (k = 2) point, φ measured from +x towards +z. Points (droplets) and
+//! volume particles are left out: droplets flung from the corners are not
+//! the outline.
 
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
@@ -19,6 +22,8 @@ pub struct OutlineModes {
     pub mean_radius: Real,
     /// `amplitude[k]`: amplitude of mode k (m), for k = 0..=kmax (index 0 is 0).
     pub amplitude: Vec<Real>,
+    /// `crest[k]`: yaw of one crest of mode k (degrees, in [0, 360/k); index 0 is 0).
+    pub crest: Vec<Real>,
     /// Sheet and filament particles measured.
     pub particles: usize,
 }
@@ -76,10 +81,10 @@ pub fn outline_modes(
         }
     }
     let mean = r.iter().sum::<Real>() / bins as Real;
-    let amplitude = (0..=kmax)
+    let (amplitude, crest) = (0..=kmax)
         .map(|k| {
             if k == 0 {
-                return 0.0;
+                return (0.0, 0.0);
             }
             let (mut c, mut s) = (0.0, 0.0);
             for (b, v) in r.iter().enumerate() {
@@ -88,12 +93,16 @@ pub fn outline_modes(
                 c += (v - mean) * (k as Real * phi).cos();
                 s += (v - mean) * (k as Real * phi).sin();
             }
-            2.0 * c.hypot(s) / bins as Real
+            // Σ (R − R̄) cos(k(φ − φ_k)) is largest at φ_k = atan2(s, c)/k
+            let period = 360.0 / k as Real;
+            let crest = (s.atan2(c).to_degrees() / k as Real).rem_euclid(period);
+            (2.0 * c.hypot(s) / bins as Real, crest)
         })
-        .collect();
+        .unzip();
     Some(OutlineModes {
         mean_radius: mean,
         amplitude,
+        crest,
         particles: n,
     })
 }
@@ -189,5 +198,28 @@ mod tests {
         assert!(outline_modes(&sheet(hex, big, s), &c, 0, 12).is_none());
         let few = outline_modes(&sheet(hex, big, s), &c, 9, 12).unwrap();
         assert_eq!(few.amplitude.len(), 5);
+    }
+
+    #[test]
+    fn the_crest_gives_where_the_corners_and_the_long_axis_point() {
+        let c = Vec3::zeros();
+        let (s, big) = (5e-4, 0.1);
+        // five corners at 20° + 72°j, and a long axis at 115° (= −65°)
+        for (k, at, expect) in [
+            (5_usize, 20.0_f64, 20.0),
+            (2, 115.0, 115.0),
+            (2, -65.0, 115.0),
+        ] {
+            let r = |phi: Real| 0.08 + 0.01 * (k as Real * (phi - at.to_radians())).cos();
+            let m = outline_modes(&sheet(r, big, s), &c, 72, 12).unwrap();
+            assert_eq!(m.strongest()[0].0, k, "{:?}", m.strongest());
+            let period = 360.0 / k as Real;
+            let off = (m.crest[k] - expect).rem_euclid(period);
+            let off = off.min(period - off);
+            // the bins are 5° wide; the lattice's sampling error shifts the
+            // crest by far less than a bin
+            assert!(off < 1.0, "k = {k}: crest {} against {expect}", m.crest[k]);
+            assert!((0.0..period).contains(&m.crest[k]), "{}", m.crest[k]);
+        }
     }
 }

@@ -1,7 +1,8 @@
 //! `codimfx outline DIR [--frames a-b] [--centre x,y,z] [--bins N] [--modes K]`:
 //! the outline of a horizontal sheet in a particle cache, seen from above,
 //! and its Fourier modes in the yaw angle (how many corners a fluid polygon
-//! has; [`codimfx::outline`]). One line per frame.
+//! has and where its corners point; [`codimfx::outline`]). One line per
+//! frame; the yaw is measured about the vertical from +x towards +z.
 use anyhow::{ensure, Context, Result};
 use clap::Args;
 use codimfx::io::manifest::Manifest;
@@ -56,7 +57,7 @@ pub fn run(a: OutlineArgs) -> Result<()> {
         "# outline of the sheet and filament particles about the vertical through ({:.4}, {:.4}, {:.4}) m, {} yaw bins",
         centre.x, centre.y, centre.z, a.bins
     );
-    println!("| frame | particles | mean radius (mm) | k = 6 (mm) | strongest three (k: mm) |");
+    println!("| frame | particles | mean radius (mm) | k = 6 (mm) | strongest three (k: mm at the yaw of a crest) |");
     println!("|---|---|---|---|---|");
     for f in lo..=hi.min(m.frames_written) {
         let path = a.dir.join(ply::frame_name(f));
@@ -67,7 +68,7 @@ pub fn run(a: OutlineArgs) -> Result<()> {
                     .strongest()
                     .iter()
                     .take(3)
-                    .map(|(k, v)| format!("{k}: {:.2}", v * 1e3))
+                    .map(|(k, v)| format!("{k}: {:.2} at {:.0}°", v * 1e3, o.crest[*k]))
                     .collect();
                 let k6 = o
                     .amplitude
