@@ -32,6 +32,9 @@ use crate::transition::cone_census;
 use faer::sparse::{SparseRowMat, SparseRowMatRef};
 use rayon::prelude::*;
 
+#[path = "tension_split.rs"]
+pub mod split;
+
 /// Role of a filament particle for the explicit tension terms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FilamentRole {
@@ -197,6 +200,9 @@ pub struct TensionSystem<'a> {
     pub dt: Real,
     /// Which part of ∇²x^n enters the right-hand side.
     pub curvature: CurvaturePart<'a>,
+    /// Take only the diffusive part of L implicitly and the rest on u^n
+    /// ([`split`], `film.implicit: diffusive`).
+    pub diffusive: bool,
 }
 
 /// Which part of the curvature vector ∇²x^n = (L x^n)_i drives the
@@ -284,9 +290,20 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
 /// ILU(0) factorisation. The previous velocity is the initial guess.
 pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolution, SolveError> {
     let n = sys.mass.len();
-    let a_mat = assemble(sys)?;
-    let a = Csr::from_faer(a_mat.as_ref())?;
     let l = Csr::from_faer(sys.laplacian)?;
+    let split = if sys.diffusive {
+        Some(split::split(&l, sys.fixed)?)
+    } else {
+        None
+    };
+    let a_mat = match &split {
+        Some(s) => assemble(&TensionSystem {
+            laplacian: s.implicit.as_ref(),
+            ..*sys
+        })?,
+        None => assemble(sys)?,
+    };
+    let a = Csr::from_faer(a_mat.as_ref())?;
     let ilu = Ilu0::new(&a)?;
     // ∇²x^n per particle (three products), then its normal part if asked
     let lx_c: Vec<Vec<Real>> = (0..3)
@@ -318,10 +335,18 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
                     if sys.fixed[i] {
                         sys.u[i][d]
                     } else {
+                        // the split's remainder on u^n, on the implicit
+                        // term's row scale (see `assemble`)
+                        let late = split.as_ref().map_or(0.0, |s| {
+                            (sys.sigma * sys.dt * sys.dt * sys.area[i] / sys.mass[i]
+                                + sys.nu * sys.dt)
+                                * split::apply_row(&s.explicit[i], |j| sys.u[j][d])
+                        });
                         (sys.sigma * sys.dt * sys.area[i] * lx[i][d]
                             + sys.dt * sys.f_explicit[i][d])
                             / sys.mass[i]
                             + sys.u[i][d]
+                            + late
                     }
                 })
                 .collect();
@@ -394,6 +419,7 @@ mod tests {
             sigma,
             dt,
             curvature: CurvaturePart::Full,
+            diffusive: false,
         };
         let sol = solve(&sys, &BicgstabParams::default()).unwrap();
         let expect = dt * sigma * area[0] / (mass[0] * r);
@@ -437,6 +463,7 @@ mod tests {
             sigma: 0.0,
             dt,
             curvature: CurvaturePart::Full,
+            diffusive: false,
         };
         let sol = solve(&sys, &BicgstabParams::default()).unwrap();
         let factor = 1.0 / (1.0 + nu * dt * k * k / (r * r));
@@ -473,6 +500,7 @@ mod tests {
             sigma: 3.0,
             dt: 0.05,
             curvature: CurvaturePart::Full,
+            diffusive: false,
         };
         let sol = solve(&sys, &BicgstabParams::default()).unwrap();
         let explicit = 0.05 * 3.0 * 1e-5 / (1e-7 * r);

@@ -256,6 +256,16 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
     check(&e, "coupling.fill_passes", 24, "1, 2 or 3");
     let e = err(&format!("{GOOD}coupling:\n  restart: 0\n"));
     check(&e, "coupling.restart", 24, "[1, 5000]");
+    assert_eq!(s.film.implicit, codimfx::scene::FilmImplicit::Full);
+    let d = load_str(
+        &format!("{GOOD}film: {{implicit: diffusive}}\n"),
+        Path::new("scene.yaml"),
+    )
+    .unwrap();
+    assert_eq!(d.film.implicit, codimfx::scene::FilmImplicit::Diffusive);
+    let e = err(&format!("{GOOD}film:\n  implicit: half\n"));
+    assert!(e.to_string().contains("unknown variant `half`"), "{e}");
+    assert_eq!(e.path(), "film.implicit", "{e}");
     let e = err(&format!("{GOOD}coupling:\n  krylov: cg\n"));
     assert!(e.to_string().contains("unknown variant `cg`"), "{e}");
     assert_eq!(e.path(), "coupling.krylov", "{e}");

@@ -312,6 +312,7 @@ fn solve_uncoupled(
                 axes: &surf.axes,
                 n_sheet: surf.n_sheet(),
             },
+            diffusive: prm.surface.diffusive,
         };
         let sol = solve_tension(&sys, &prm.solver).map_err(solve_err("surface tension"))?;
         info.iterations += sol.info.iter().map(|s| s.iterations).sum::<usize>();

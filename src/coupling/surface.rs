@@ -39,6 +39,10 @@ pub struct SurfaceParams {
     pub bud_angle: Real,
     /// Rim tension modulation (fluid polygon, §10.2).
     pub rim_modulation: Option<Sawtooth>,
+    /// Implicit tension on the diffusive part of L only, where the tension
+    /// is solved on its own ([`crate::tension::split`]; the monolithic
+    /// system of eq. 24 keeps L whole).
+    pub diffusive: bool,
 }
 
 /// Counts of the particle side.

@@ -72,6 +72,9 @@ pub struct FilmParams {
     /// Speed limit (m/s) applied after each substep of a scene, counted
     /// (`fallbacks.speed_clamps`); 0 for none.
     pub max_speed: Real,
+    /// Implicit tension on the diffusive part of L only
+    /// ([`crate::tension::split`], `film.implicit: diffusive`).
+    pub diffusive: bool,
 }
 
 impl FilmParams {
@@ -109,6 +112,7 @@ impl FilmParams {
             sheet_line_ratio: 0.05,
             rim_modulation: None,
             max_speed: 0.0,
+            diffusive: false,
         }
     }
 }

@@ -369,6 +369,7 @@ pub fn step(
         viscosity: 0.0,
         bud_angle: prm.bud_angle,
         rim_modulation: prm.rim_modulation,
+        diffusive: prm.diffusive,
     };
     let terms = particle_terms(&nb, &frames, |i| film.mass[i], |_| prm.free_film, &sp);
     let voronoi: Vec<Real> = terms.iter().map(|t| t.voronoi).collect();
@@ -468,6 +469,7 @@ pub fn step(
             axes: &axes,
             n_sheet,
         },
+        diffusive: prm.diffusive,
     };
     let sol = solve_tension(&sys, &prm.solver).map_err(|e| FilmError::Solve {
         stage: "surface tension",

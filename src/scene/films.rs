@@ -158,6 +158,23 @@ pub struct FilmSettings {
     /// Saw-tooth modulation of the rim tension (fluid polygon); none by default.
     #[serde(default)]
     pub rim_modulation: Option<RimModulation>,
+    /// What of the MLS Laplacian the semi-implicit tension (eq. 16) takes
+    /// implicitly: `full` (the paper) or `diffusive`.
+    #[serde(default)]
+    pub implicit: FilmImplicit,
+}
+
+/// `film.implicit`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FilmImplicit {
+    /// The whole Laplacian, as eq. (16).
+    #[default]
+    Full,
+    /// Its diffusive part (non-negative off-diagonals, zero row sum), the
+    /// rest on the previous velocity: a system that stays an M-matrix
+    /// whatever the step ([`crate::tension::split`]).
+    Diffusive,
 }
 
 impl Default for FilmSettings {
@@ -175,6 +192,7 @@ impl Default for FilmSettings {
             solver_tolerance: default_film_tol(),
             solver_max_iterations: default_film_iters(),
             rim_modulation: None,
+            implicit: FilmImplicit::Full,
         }
     }
 }

@@ -19,7 +19,7 @@ mod load;
 mod sample;
 mod validate;
 
-pub use films::{sample_films, FilmBody, FilmSettings, RimModulation, WindSettings};
+pub use films::{sample_films, FilmBody, FilmImplicit, FilmSettings, RimModulation, WindSettings};
 pub use jets::{
     BandSetting, CouplingMethod, CouplingSettings, FaceMassSetting, JetPattern, JetSettings,
     KrylovSetting,
