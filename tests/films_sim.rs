@@ -353,6 +353,25 @@ fn preset_wind_blows_a_steady_bag_with_the_young_laplace_apex() {
     assert!(sim.state.particles.all_finite());
 }
 
+/// Whether a film sheet particle is left within 5 mm of the pinch preset's middle.
+fn sheet_in_the_middle(p: &codimfx::particles::Particles) -> bool {
+    (0..p.len()).any(|i| {
+        p.codim[i] == codimfx::particles::Codim::Sheet && !p.fixed[i] && p.x[i].z.abs() < 0.005
+    })
+}
+
+/// Asserts that at time `t` the pinch preset's rings (0.0384 m apart, each
+/// moving out at 0.05 m/s) are past the critical separation 1.3255 R.
+fn past_critical(t: f64, what: &str) {
+    let ring_r = 0.0512;
+    let d = 0.0384 + 2.0 * 0.05 * t;
+    assert!(
+        d > 1.3255 * ring_r,
+        "{what} at d = {d} m ({} R)",
+        d / ring_r
+    );
+}
+
 #[test]
 fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
     // the shipped preset (s = 2 mm): the neck pinches in frame 13 and the
@@ -366,9 +385,7 @@ fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
     let mut split = None;
     sim.run(&AtomicBool::new(false), |s, _| {
         let p = &s.state.particles;
-        let middle = (0..p.len())
-            .any(|i| p.codim[i] == Codim::Sheet && !p.fixed[i] && p.x[i].z.abs() < 0.005);
-        if split.is_none() && !middle {
+        if split.is_none() && !sheet_in_the_middle(p) {
             split = Some(s.time);
         }
     })
@@ -409,9 +426,7 @@ fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
         );
     }
     // the pinch happened after the critical separation 1.3255 R
-    let t_split = split.expect("the film never split");
-    let d = 0.0384 + 2.0 * 0.05 * t_split;
-    assert!(d > 1.3255 * ring_r, "split at d = {d} m ({} R)", d / ring_r);
+    past_critical(split.expect("the film never split"), "split");
 }
 
 #[test]
@@ -436,9 +451,7 @@ fn the_diffusive_split_runs_the_pinch_at_the_papers_step() {
     let (mut split, mut torn_before) = (None, None);
     sim.run(&AtomicBool::new(false), |s, _| {
         let p = &s.state.particles;
-        let middle = (0..p.len())
-            .any(|i| p.codim[i] == Codim::Sheet && !p.fixed[i] && p.x[i].z.abs() < 0.005);
-        if split.is_none() && !middle {
+        if split.is_none() && !sheet_in_the_middle(p) {
             split = Some(s.time);
         }
         let loose = p.codim.iter().any(|c| *c != Codim::Sheet);
@@ -452,17 +465,11 @@ fn the_diffusive_split_runs_the_pinch_at_the_papers_step() {
     assert_eq!(halvings, 0, "substeps halved");
     let m0 = m.frames[0].total_mass;
     assert!((sim.state.particles.total_mass() - m0).abs() < 1e-12 * m0);
-    let ring_r = 0.0512;
-    let t_split = split.expect("the film never split");
-    let d = 0.0384 + 2.0 * 0.05 * t_split;
-    assert!(d > 1.3255 * ring_r, "split at d = {d} m ({} R)", d / ring_r);
+    past_critical(split.expect("the film never split"), "split");
     // the first filament or droplet comes with the pinch, not before the
     // neck has passed the critical separation
-    let t_loose = torn_before.expect("no droplet at all");
-    let d_loose = 0.0384 + 2.0 * 0.05 * t_loose;
-    assert!(
-        d_loose > 1.3255 * ring_r,
-        "film torn at d = {d_loose} m ({} R)",
-        d_loose / ring_r
+    past_critical(
+        torn_before.expect("no droplet at all"),
+        "first filament or droplet",
     );
 }
