@@ -11,6 +11,8 @@
 //!
 //! — one matrix for the three components, non-symmetric because L is;
 //! solved with BiCGSTAB + ILU(0) ([`crate::linsolve`]).
+//! With `film.implicit: diffusive` only the diffusive part of L is
+//! implicit and the rest acts on u^n ([`split`]): an M-matrix at any Δt.
 //!
 //! Rim particles (filament particles on a sheet's edge) get the explicit rim
 //! force σ n S_r / r (Bush & Hasha 2004) with n = ±b² oriented into the sheet
