@@ -342,7 +342,7 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
                         let late = split.as_ref().map_or(0.0, |s| {
                             (sys.sigma * sys.dt * sys.dt * sys.area[i] / sys.mass[i]
                                 + sys.nu * sys.dt)
-                                * split::apply_row(&s.explicit[i], |j| sys.u[j][d])
+                                * s.remainder(i, |j| sys.u[j][d])
                         });
                         (sys.sigma * sys.dt * sys.area[i] * lx[i][d]
                             + sys.dt * sys.f_explicit[i][d])

@@ -31,19 +31,41 @@ use faer::sparse::{SparseRowMat, Triplet};
 pub struct Split {
     /// L⁺ (fixed rows copied from L: their rows are identity rows anyway).
     pub implicit: SparseRowMat<usize, Real>,
-    /// L⁻ per row: (column, weight); empty for fixed rows.
-    pub explicit: Vec<Vec<(usize, Real)>>,
+    /// L⁻ in compressed rows: row i's (column, weight) pairs are
+    /// `explicit[explicit_ptr[i]..explicit_ptr[i + 1]]`; empty for fixed rows.
+    pub explicit: Vec<(usize, Real)>,
+    /// Row starts of `explicit` (n + 1).
+    pub explicit_ptr: Vec<usize>,
+}
+
+impl Split {
+    /// (L⁻ v)_i.
+    pub fn remainder(&self, i: usize, v: impl Fn(usize) -> Real) -> Real {
+        self.explicit[self.explicit_ptr[i]..self.explicit_ptr[i + 1]]
+            .iter()
+            .map(|&(j, w)| w * v(j))
+            .sum()
+    }
 }
 
 /// Splits the rows of `l` that are not `fixed` (see the module doc).
 pub fn split(l: &Csr, fixed: &[bool]) -> Result<Split, SolveError> {
     let n = l.nrows;
+    if fixed.len() != n {
+        return Err(SolveError::Dimension(format!(
+            "diffusive split: {n} rows, {} fixed flags",
+            fixed.len()
+        )));
+    }
     let mut t = Vec::with_capacity(l.val.len());
-    let mut explicit = vec![Vec::new(); n];
-    for i in 0..n {
+    let mut explicit = Vec::with_capacity(l.val.len());
+    let mut explicit_ptr = Vec::with_capacity(n + 1);
+    explicit_ptr.push(0);
+    for (i, &fx) in fixed.iter().enumerate().take(n) {
         let rg = l.row_ptr[i]..l.row_ptr[i + 1];
-        if fixed[i] {
+        if fx {
             t.extend(rg.map(|k| Triplet::new(i, l.col[k], l.val[k])));
+            explicit_ptr.push(explicit.len());
             continue;
         }
         let (mut diag, mut pos) = (0.0, 0.0);
@@ -55,20 +77,20 @@ pub fn split(l: &Csr, fixed: &[bool]) -> Result<Split, SolveError> {
                 t.push(Triplet::new(i, j, v));
                 pos += v;
             } else if v < 0.0 {
-                explicit[i].push((j, v));
+                explicit.push((j, v));
             }
         }
         t.push(Triplet::new(i, i, -pos));
-        explicit[i].push((i, diag + pos));
+        explicit.push((i, diag + pos));
+        explicit_ptr.push(explicit.len());
     }
     let implicit = SparseRowMat::try_new_from_triplets(n, l.ncols, &t)
         .map_err(|e| SolveError::Dimension(format!("diffusive split: {e:?}")))?;
-    Ok(Split { implicit, explicit })
-}
-
-/// (L⁻ v)_i for one row.
-pub fn apply_row(row: &[(usize, Real)], v: impl Fn(usize) -> Real) -> Real {
-    row.iter().map(|&(j, w)| w * v(j)).sum()
+    Ok(Split {
+        implicit,
+        explicit,
+        explicit_ptr,
+    })
 }
 
 #[cfg(test)]
@@ -101,8 +123,9 @@ mod tests {
                     .map(|k| c.val[k])
                     .sum()
             };
+            let row = &s.explicit[s.explicit_ptr[i]..s.explicit_ptr[i + 1]];
             for j in 0..4 {
-                let ex: Real = s.explicit[i].iter().filter(|e| e.0 == j).map(|e| e.1).sum();
+                let ex: Real = row.iter().filter(|e| e.0 == j).map(|e| e.1).sum();
                 // L⁺ + L⁻ = L entry by entry
                 assert!(
                     (dense(&imp, j) + ex - dense(&l, j)).abs() < 1e-14,
@@ -116,7 +139,7 @@ mod tests {
                 let sum: Real = (0..4).map(|j| dense(&imp, j)).sum();
                 assert!(sum.abs() < 1e-14, "row {i} of L⁺ sums to {sum}");
             } else {
-                assert!(s.explicit[i].is_empty());
+                assert!(row.is_empty());
             }
         }
         // row 1's diagonal was +2.5: in L⁺ it is −1.5 (its positive
@@ -126,9 +149,7 @@ mod tests {
             .map(|k| imp.val[k])
             .sum();
         assert_eq!(d1, -1.5);
-        assert_eq!(
-            apply_row(&s.explicit[1], |j| [1.0, 1.0, 1.0, 1.0][j]),
-            4.0 - 4.0
-        );
+        assert_eq!(s.remainder(1, |_| 1.0), 4.0 - 4.0);
+        assert_eq!(s.remainder(1, |j| j as Real), 2.0 * -4.0 + 4.0);
     }
 }
