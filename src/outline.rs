@@ -8,9 +8,9 @@
 //! |2/N Σ_b R_b e^{−ikφ_b}|, so a radius R̄ + A cos(kφ) has amplitude A in
 //! mode k. Its crest, the yaw φ_k of a maximum of A cos(k(φ − φ_k)), is
 //! arg(Σ_b R_b e^{ikφ_b})/k, reported in [0°, 360°/k): where the corners
-//! (k ≥ 3) or the long axis (k = 2) point, φ measured from +x towards +z. Points (droplets) and
-//! volume particles are left out: droplets flung from the corners are not
-//! the outline.
+//! (k ≥ 3) or the long axis (k = 2) point, φ measured from +x towards +z.
+//! Points (droplets) and volume particles are left out: droplets flung from
+//! the corners are not the outline.
 
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};

@@ -203,7 +203,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             viscosity: s.physics.viscosity,
             bud_angle: std::f64::consts::PI / 6.0,
             rim_modulation: s.film.rim_modulation.as_ref().map(|m| m.sawtooth()),
-            diffusive: s.film.implicit == crate::scene::FilmImplicit::Diffusive,
+            diffusive: s.film.diffusive(),
         },
         pressure: PcgParams {
             tolerance: s.solver.pressure_tolerance,

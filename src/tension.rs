@@ -267,7 +267,6 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
             sys.fixed.len()
         )));
     }
-    let c = sys.sigma * sys.dt * sys.dt;
     // a fixed row keeps only its diagonal 1 (its Laplacian entries scaled to 0)
     Ok(diag_plus_scaled_rows(
         sys.laplacian,
@@ -282,10 +281,16 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
             if sys.fixed[i] {
                 0.0
             } else {
-                -(c * sys.area[i] / sys.mass[i] + sys.nu * sys.dt)
+                -implicit_scale(sys, i)
             }
         },
     ))
+}
+
+/// The factor σΔt² S_i/m_i + νΔt of L's row i in the implicit term of the
+/// mass-scaled eq. (16) (non-fixed rows).
+fn implicit_scale(sys: &TensionSystem, i: usize) -> Real {
+    sys.sigma * sys.dt * sys.dt * sys.area[i] / sys.mass[i] + sys.nu * sys.dt
 }
 
 /// Solves eq. (16)/(17) for u^{n+1}, component by component with one
@@ -340,9 +345,7 @@ pub fn solve(sys: &TensionSystem, prm: &BicgstabParams) -> Result<TensionSolutio
                         // the split's remainder on u^n, on the implicit
                         // term's row scale (see `assemble`)
                         let late = split.as_ref().map_or(0.0, |s| {
-                            (sys.sigma * sys.dt * sys.dt * sys.area[i] / sys.mass[i]
-                                + sys.nu * sys.dt)
-                                * s.remainder(i, |j| sys.u[j][d])
+                            implicit_scale(sys, i) * s.remainder(i, |j| sys.u[j][d])
                         });
                         (sys.sigma * sys.dt * sys.area[i] * lx[i][d]
                             + sys.dt * sys.f_explicit[i][d])

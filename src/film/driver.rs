@@ -55,7 +55,7 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
         max_iter: f.solver_max_iterations,
     };
     prm.max_speed = f.max_speed;
-    prm.diffusive = f.implicit == crate::scene::FilmImplicit::Diffusive;
+    prm.diffusive = f.diffusive();
     prm.rim_modulation = f.rim_modulation.as_ref().map(|m| m.sawtooth());
     prm
 }

@@ -177,6 +177,13 @@ pub enum FilmImplicit {
     Diffusive,
 }
 
+impl FilmSettings {
+    /// Whether the tension takes only the diffusive part of L implicitly.
+    pub fn diffusive(&self) -> bool {
+        self.implicit == FilmImplicit::Diffusive
+    }
+}
+
 impl Default for FilmSettings {
     fn default() -> Self {
         FilmSettings {
