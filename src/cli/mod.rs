@@ -6,3 +6,4 @@ pub mod sim;
 pub mod surface;
 pub mod validate;
 pub mod validate_films;
+pub mod validate_liquid;

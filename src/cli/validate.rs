@@ -96,6 +96,8 @@ enum Case {
     SphereDeformation(super::validate_films::DeformationArgs),
     /// A film between two rings settles to the catenoid r = a cosh(z/a) (Fig. 6).
     Catenoid(super::validate_films::CatenoidArgs),
+    /// A free liquid slab's edge against the 2σ-per-length pull of Taylor–Culick retraction.
+    Slab(super::validate_liquid::SlabArgs),
 }
 
 /// Flags of `validate sphere-diffusion`.
@@ -185,6 +187,7 @@ pub fn run(a: ValidateArgs) -> Result<()> {
         Case::Butterfly(b) => butterfly(b),
         Case::SphereDeformation(d) => super::validate_films::deformation(d),
         Case::Catenoid(c) => super::validate_films::catenoid(c),
+        Case::Slab(s) => super::validate_liquid::slab(s),
     }
 }
 

@@ -8,12 +8,16 @@
 //! * [`butterfly`]: implicit diffusion on a sheet wing with filament rim and
 //!   tails (joint operator, Fig. 12): heat drift and the maximum principle.
 //!
+//! [`droplet`] and [`slab`] are cases of the coupled solver: a droplet's
+//! Young–Laplace jump and l = 2 period, a free slab's edge pull.
+//!
 //! [`sampling`] builds the point sets, [`time`] the integrators.
 
 pub mod butterfly;
 pub mod curvature;
 pub mod droplet;
 pub mod sampling;
+pub mod slab;
 pub mod sphere_diffusion;
 pub mod time;
 
