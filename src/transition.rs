@@ -41,9 +41,16 @@
 //! - 2→1 (not in the paper): otherwise a filament particle with a volume
 //!   particle within h has come to lie on a liquid body's surface, and joins
 //!   its surface layer: the converse of the free-sheets-only 1→2 rule.
+//! - 2→1 in film scenes (not in the paper; [`TransitionParams::film`]): a
+//!   filament particle inside a flat film, its sheet neighbours all around
+//!   it ([`surrounded_by_sheet`]). After a catenoid pinches, the neck's
+//!   last filament particles stay at each half-film's apex; once the funnel
+//!   has flattened they sit inside the film, and as rims they absorbed the
+//!   film around them and opened it back to the ring.
 //!
-//! The paper implements no 2→1; this module does so only in liquid scenes,
-//! for filaments on a body's surface.
+//! The paper implements no 2→1; this module does so in liquid scenes for
+//! filaments on a body's surface, and in film scenes for filaments inside
+//! a flat film.
 
 use crate::math::{Mat3, Real, Vec3};
 use crate::particles::Codim;
@@ -118,6 +125,62 @@ pub fn cone_census(
     c
 }
 
+/// Whether the sheet neighbours within h of particle `p` (at least five)
+/// surround it in a flat film: x_p lies in their best-fit plane (within
+/// 0.2 of their in-plane spread), and projected on that plane the widest
+/// angle between consecutive ones, seen from x_p, is below `max_gap`. A
+/// filament particle on a film's edge sees its sheet neighbours in a
+/// half-disc, and the tip of a funnel retracting after a pinch stands above
+/// its ring of neighbours; one left inside a flat film (the pinched neck's
+/// debris once the funnel has flattened) has them all around.
+pub fn surrounded_by_sheet(
+    p: usize,
+    h: Real,
+    max_gap: Real,
+    x: &[Vec3],
+    codim: &[Codim],
+    nbrs: &[u32],
+) -> bool {
+    let d: Vec<Vec3> = nbrs
+        .iter()
+        .map(|&q| q as usize)
+        .filter(|&q| q != p && codim[q] == Codim::Sheet)
+        .map(|q| x[q] - x[p])
+        .filter(|d| {
+            let r = d.norm();
+            r > 0.0 && r < h
+        })
+        .collect();
+    if d.len() < 5 {
+        return false;
+    }
+    // their plane through their centroid c; x_p must lie in it (a cone's
+    // apex does not: it stands cot α times the ring's radius above it)
+    let c = d.iter().fold(Vec3::zeros(), |a, v| a + v) / d.len() as Real;
+    let cov = d
+        .iter()
+        .fold(Mat3::zeros(), |m, v| m + (v - c) * (v - c).transpose());
+    let eig = cov.symmetric_eigen();
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let n: Vec3 = eig.eigenvectors.column(order[0]).into();
+    let e1: Vec3 = eig.eigenvectors.column(order[2]).into();
+    let e2: Vec3 = eig.eigenvectors.column(order[1]).into();
+    let spread = (d
+        .iter()
+        .map(|v| (v - n * n.dot(v)).norm_squared())
+        .sum::<Real>()
+        / d.len() as Real)
+        .sqrt();
+    if n.dot(&c).abs() > 0.2 * spread {
+        return false;
+    }
+    let mut ang: Vec<Real> = d.iter().map(|v| v.dot(&e2).atan2(v.dot(&e1))).collect();
+    ang.sort_by(|a, b| a.total_cmp(b));
+    let wrap = ang[0] + std::f64::consts::TAU - ang[ang.len() - 1];
+    ang.windows(2).map(|w| w[1] - w[0]).fold(wrap, Real::max) < max_gap
+}
+
 /// Parameters of the transition rules (paper §8). Angles in radians
 /// (half apertures, see the module doc), distances relative to h.
 #[derive(Clone, Debug, PartialEq)]
@@ -132,6 +195,14 @@ pub struct TransitionParams {
     pub sheet_to_volume_angle: Real,
     /// 1→2 cone half-aperture along b² (paper: π/6).
     pub sheet_to_filament_angle: Real,
+    /// 2→1 in a free film (not in the paper): a filament particle whose
+    /// sheet neighbours within h surround it, leaving no gap wider than
+    /// this angle in their own plane ([`surrounded_by_sheet`]), lies inside
+    /// the film, not on its edge. 0 (liquid scenes) disables the rule; film
+    /// scenes use π/2. An edge particle's neighbours leave a gap of about π,
+    /// and 1→2 needs the 60° wedge along b² empty, so a particle that 1→2
+    /// turns is not turned back.
+    pub filament_to_sheet_gap: Real,
     /// Enable the volume↔sheet rules (off in film-only scenes).
     pub volume_rules: bool,
 }
@@ -146,7 +217,20 @@ impl TransitionParams {
             thin_distance: 0.5,
             sheet_to_volume_angle: PI / 4.0,
             sheet_to_filament_angle: PI / 6.0,
+            filament_to_sheet_gap: 0.0,
             volume_rules: true,
+        }
+    }
+
+    /// The rules of a film-only scene: no volume rules, and 2→1 for a
+    /// filament particle inside a flat film (docs/decisions.md, "After the
+    /// split").
+    pub fn film(h: Real) -> Self {
+        use std::f64::consts::PI;
+        TransitionParams {
+            volume_rules: false,
+            filament_to_sheet_gap: PI / 2.0,
+            ..TransitionParams::paper(h)
         }
     }
 }
@@ -304,6 +388,11 @@ pub fn new_codim(
                 if has_volume_within(p, x, codim, nbrs, prm.h) {
                     return Codim::Sheet;
                 }
+            }
+            if prm.filament_to_sheet_gap > 0.0
+                && surrounded_by_sheet(p, prm.h, prm.filament_to_sheet_gap, x, codim, nbrs)
+            {
+                return Codim::Sheet;
             }
             let has_filament = nbrs.iter().any(|&q| {
                 let q = q as usize;

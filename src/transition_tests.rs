@@ -301,3 +301,67 @@ fn census_is_independent_of_neighbour_order() {
     assert_eq!(a.plus, b.plus);
     assert_eq!(a.minus, b.minus);
 }
+
+#[test]
+fn a_filament_inside_a_flat_film_rejoins_it_an_edge_or_a_funnel_tip_does_not() {
+    let h = 0.3;
+    let s = 0.1;
+    // a 7 × 7 sheet in the xy plane, its centre particle a filament
+    let x = sheet(7, s);
+    let centre = 24;
+    let mut codim = vec![Codim::Sheet; x.len()];
+    codim[centre] = Codim::Filament;
+    let frames = vec![Mat3::identity(); x.len()];
+    let fixed = vec![false; x.len()];
+    let nl = neighbor_lists(&x, h);
+    let film = TransitionParams::film(h);
+    let at = |x: &[Vec3], codim: &[Codim], k: usize, prm: &TransitionParams| {
+        new_codim(k, &frames[k], x, codim, &fixed, nl.of(k), prm)
+    };
+    assert_eq!(at(&x, &codim, centre, &film), Codim::Sheet);
+    // the paper's rules (liquid scenes) do not return it to the film: with
+    // no filament neighbour it becomes a point
+    assert_eq!(
+        at(&x, &codim, centre, &TransitionParams::paper(h)),
+        Codim::Point
+    );
+    // a filament on the sheet's edge (the middle of a side) stays one
+    let mut edge = vec![Codim::Sheet; x.len()];
+    edge[3] = Codim::Filament;
+    edge[2] = Codim::Filament;
+    edge[4] = Codim::Filament;
+    assert_eq!(at(&x, &edge, 3, &film), Codim::Filament);
+    // the centre lifted into the tip of a funnel (1.5 spacings above its
+    // neighbours' plane) does not rejoin the film (alone, it is a point)
+    let mut tip = x.clone();
+    tip[centre].z += 1.5 * s;
+    let nl2 = neighbor_lists(&tip, h);
+    assert_eq!(
+        new_codim(
+            centre,
+            &frames[centre],
+            &tip,
+            &codim,
+            &fixed,
+            nl2.of(centre),
+            &film
+        ),
+        Codim::Point
+    );
+    assert!(!surrounded_by_sheet(
+        centre,
+        h,
+        film.filament_to_sheet_gap,
+        &tip,
+        &codim,
+        nl2.of(centre)
+    ));
+    assert!(surrounded_by_sheet(
+        centre,
+        h,
+        film.filament_to_sheet_gap,
+        &x,
+        &codim,
+        nl.of(centre)
+    ));
+}

@@ -377,10 +377,32 @@ fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
     // the shipped preset (s = 2 mm): the neck pinches in frame 13 and the
     // film splits into two films, each spanning its ring as a disk (paper
     // Fig. 6), with a few droplets between them; mass stays exact
-    use codimfx::particles::Codim;
     let tmp = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/catenoid_pinch.yaml");
-    let mut sim = open(&scene, tmp.path(), 16, false);
+    splits_into_two_spanning_films(&scene, tmp.path(), 16);
+}
+
+#[test]
+fn both_half_films_survive_the_pinch_at_a_neighbouring_spacing() {
+    // the preset at Δx = 0.0061: the neck's last filament particles stayed
+    // at one half-film's apex and, as a rim, absorbed it back to its ring in
+    // frames 17–18; with 2→1 inside a flat film both halves hold
+    // (docs/decisions.md, "After the split")
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = preset_with(
+        tmp.path(),
+        "catenoid_pinch",
+        &[("dx: 0.006 ", "dx: 0.0061 ")],
+    );
+    splits_into_two_spanning_films(&scene, tmp.path(), 18);
+}
+
+/// Runs `scene` to `frames` and checks the split: mass exact, droplets in
+/// the box, no sheet left near the middle, each half a film from near the
+/// axis to its ring, and the split past the critical separation.
+fn splits_into_two_spanning_films(scene: &Path, out: &Path, frames: u32) {
+    use codimfx::particles::Codim;
+    let mut sim = open(scene, out, frames, false);
     // the split: the first frame with no sheet particle left near the middle
     let mut split = None;
     sim.run(&AtomicBool::new(false), |s, _| {

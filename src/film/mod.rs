@@ -101,10 +101,7 @@ impl FilmParams {
             free_film: true,
             damping: 0.0,
             wind: None,
-            transitions: Some(TransitionParams {
-                volume_rules: false,
-                ..TransitionParams::paper(h)
-            }),
+            transitions: Some(TransitionParams::film(h)),
             reseed: Some(ReseedParams::paper(h)),
             solver: BicgstabParams::default(),
             bud_angle: std::f64::consts::PI / 6.0,
