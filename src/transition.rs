@@ -199,9 +199,10 @@ pub struct TransitionParams {
     /// sheet neighbours within h surround it, leaving no gap wider than
     /// this angle in their own plane ([`surrounded_by_sheet`]), lies inside
     /// the film, not on its edge. 0 (liquid scenes) disables the rule; film
-    /// scenes use π/2. An edge particle's neighbours leave a gap of about π,
-    /// and 1→2 needs the 60° wedge along b² empty, so a particle that 1→2
-    /// turns is not turned back.
+    /// scenes use π/2. An edge particle's neighbours leave a gap of about π.
+    /// 1→2 only needs the 60° wedge along b² empty, so a particle can meet
+    /// both rules and flip between them from one substep to the next (seen
+    /// on a freshly split film, docs/decisions.md, "2→1 inside a flat film").
     pub filament_to_sheet_gap: Real,
     /// Enable the volume↔sheet rules (off in film-only scenes).
     pub volume_rules: bool,
