@@ -157,15 +157,11 @@ pub fn surrounded_by_sheet(
     // their plane through their centroid c; x_p must lie in it (a cone's
     // apex does not: it stands cot α times the ring's radius above it)
     let c = d.iter().fold(Vec3::zeros(), |a, v| a + v) / d.len() as Real;
-    let cov = d
-        .iter()
-        .fold(Mat3::zeros(), |m, v| m + (v - c) * (v - c).transpose());
-    let eig = cov.symmetric_eigen();
-    let mut order = [0usize, 1, 2];
-    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let n: Vec3 = eig.eigenvectors.column(order[0]).into();
-    let e1: Vec3 = eig.eigenvectors.column(order[2]).into();
-    let e2: Vec3 = eig.eigenvectors.column(order[1]).into();
+    let plane = crate::mls::frame::frame_from_covariance(
+        d.iter()
+            .fold(Mat3::zeros(), |m, v| m + (v - c) * (v - c).transpose()),
+    );
+    let (e1, e2, n) = (plane.axis(0), plane.axis(1), plane.axis(2));
     let spread = (d
         .iter()
         .map(|v| (v - n * n.dot(v)).norm_squared())
