@@ -71,6 +71,13 @@ pub struct ReseedParams {
     /// A sheet particle closer than this (relative to h) to a filament
     /// particle is absorbed by it (rim collection); 0 disables it.
     pub absorb_distance: Real,
+    /// Rim collection only by filament particles on a film's edge: one whose
+    /// sheet neighbours within h surround it, leaving no gap wider than this
+    /// angle ([`crate::transition::surrounded_by_sheet`]), lies inside a
+    /// flat film and collects nothing. 0 (liquid scenes, the paper) lets
+    /// every filament particle collect; film scenes use π/2, the gap of
+    /// their 2→1 rule (docs/decisions.md, "Inside a film, no rim collects").
+    pub rim_gap: Real,
     /// A particle lighter than this fraction of the mean mass of its
     /// same-codimension neighbours is merged into the nearest one; 0 disables it.
     pub light_fraction: Real,
@@ -103,6 +110,7 @@ impl ReseedParams {
             donors: 4,
             gap_lines: false,
             absorb_distance: 0.3,
+            rim_gap: 0.0,
             light_fraction: 0.2,
             min_mass: 0.0,
             heavy_fraction: 0.0,

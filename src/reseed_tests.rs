@@ -278,6 +278,36 @@ fn a_rim_collects_free_sheet_particles_but_not_a_liquid_bodys_surface_layer() {
 }
 
 #[test]
+fn a_filament_particle_inside_a_flat_film_collects_nothing_one_on_its_edge_does() {
+    // a 9 × 9 sheet at spacing 0.25 h; one filament particle replaces its
+    // centre, another its edge's middle; each has sheet particles 0.25 h away
+    let (h, s) = (0.1, 0.025);
+    let at = |i: usize, j: usize| Vec3::new(i as Real * s, j as Real * s, 0.0);
+    let build = |fil: (usize, usize)| {
+        let mut p = flat_sheet(9, s, Some(fil));
+        p.push(at(fil.0, fil.1), Vec3::zeros(), 1.0, 0.01, Codim::Filament);
+        p
+    };
+    let paper = ReseedParams::paper(h);
+    let film = ReseedParams {
+        rim_gap: std::f64::consts::FRAC_PI_2,
+        ..paper.clone()
+    };
+    // inside: the paper's rule collects the four nearest (0.25 h < 0.3 h),
+    // the film rule none
+    assert_eq!(absorb_into_rims(&mut build((4, 4)), &paper, &[]), 4);
+    let mut inside = build((4, 4));
+    let m0 = inside.total_mass();
+    assert_eq!(absorb_into_rims(&mut inside, &film, &[]), 0);
+    assert_eq!(inside.len(), 81);
+    assert!((inside.total_mass() - m0).abs() < 1e-12 * m0);
+    // on the edge (a gap of π on the open side) both rules collect its
+    // three sheet neighbours
+    assert_eq!(absorb_into_rims(&mut build((4, 0)), &paper, &[]), 3);
+    assert_eq!(absorb_into_rims(&mut build((4, 0)), &film, &[]), 3);
+}
+
+#[test]
 fn the_mass_floor_stops_insertion_and_merges_what_is_below_it() {
     let h = 0.1;
     // the stretched line: the new particle takes 1/5 of each of its four

@@ -397,6 +397,26 @@ fn both_half_films_survive_the_pinch_at_a_neighbouring_spacing() {
     splits_into_two_spanning_films(&scene, tmp.path(), 18);
 }
 
+#[test]
+fn both_half_films_survive_the_pinch_at_the_papers_step() {
+    // the preset at Δx = 0.0058 with Table 2's Δt = 5 ms and the diffusive
+    // split: filament particles left inside the half-films collected them
+    // as rims (2,209, 2,143 and 2,127 sheet particles in frames 10–12) and
+    // both halves ran back to their rings; inside a film no rim collects
+    // now (docs/decisions.md, "Inside a film, no rim collects")
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = preset_with(
+        tmp.path(),
+        "catenoid_pinch",
+        &[
+            ("dx: 0.006 ", "dx: 0.0058 "),
+            ("max_dt: 0.0025 ", "max_dt: 0.005 "),
+            ("\nfilm:\n", "\nfilm:\n  implicit: diffusive\n"),
+        ],
+    );
+    splits_into_two_spanning_films(&scene, tmp.path(), 18);
+}
+
 /// Runs `scene` to `frames` and checks the split: mass exact, droplets in
 /// the box, no sheet left near the middle, each half a film from near the
 /// axis to its ring, and the split past the critical separation.

@@ -102,7 +102,10 @@ impl FilmParams {
             damping: 0.0,
             wind: None,
             transitions: Some(TransitionParams::film(h)),
-            reseed: Some(ReseedParams::paper(h)),
+            reseed: Some(ReseedParams {
+                rim_gap: std::f64::consts::FRAC_PI_2,
+                ..ReseedParams::paper(h)
+            }),
             solver: BicgstabParams::default(),
             bud_angle: std::f64::consts::PI / 6.0,
             clump_ratio: 0.3,
