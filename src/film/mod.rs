@@ -7,6 +7,7 @@
 //! semi-implicit surface tension of §6 (eq. 16) with explicit rim and bud
 //! tension. Scenes with a liquid volume use the coupled step instead.
 
+pub mod advance;
 pub mod catenoid;
 pub mod deformation;
 pub mod driver;
