@@ -435,6 +435,44 @@ fn both_half_films_survive_the_pinch_at_the_papers_step() {
     splits_into_two_spanning_films(&scene, tmp.path(), 18);
 }
 
+#[test]
+fn the_papers_63k_film_holds_at_5_ms_where_its_rows_stretch() {
+    // the preset at the paper's spacing (Δx = 0.00133 m: 63,888 particles,
+    // Table 1) and step (5 ms), written at 300 fps, to t = 86.7 ms. The rings
+    // pull the film's rows apart next to them; where the rows reach ~h/2 the
+    // cubic fit's Laplacian rows turn anti-diffusive (negative weights summing
+    // to ~1.1 of the diagonal, against 0.1 in the regular film) and, with the
+    // cubic fit, the film tore at both rings in frame 23 (t = 73–77 ms: 4 m/s,
+    // substeps down to 0.06 ms). With the paper's quadratic fit (the preset's
+    // `order: 2`) it stays a calm film (docs/decisions.md, "Moving rings: the
+    // pinch", session 22)
+    use codimfx::particles::Codim;
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = preset_with(
+        tmp.path(),
+        "catenoid_pinch",
+        &[("dx: 0.006 ", "dx: 0.00133 "), ("fps: 30\n", "fps: 300\n")],
+    );
+    let mut sim = open(&scene, tmp.path(), 26, false);
+    assert_eq!(sim.state.particles.len(), 63_888);
+    sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();
+    let m = &sim.manifest;
+    for f in &m.frames[1..] {
+        assert_eq!(f.fallbacks.step_halvings, 0, "frame {}", f.frame);
+        let torn: usize = ["filament", "point"]
+            .iter()
+            .map(|k| f.counts.get(*k).copied().unwrap_or(0))
+            .sum();
+        assert_eq!(torn, 0, "frame {}: the film tore", f.frame);
+        // the film rings at up to ~0.3 m/s early on; a tear runs at metres per second
+        assert!(f.speed.max < 0.5, "frame {}: {} m/s", f.frame, f.speed.max);
+    }
+    let p = &sim.state.particles;
+    let m0 = m.frames[0].total_mass;
+    assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
+    assert!(p.codim.iter().all(|c| *c == Codim::Sheet));
+}
+
 /// Runs `scene` to `frames` and checks the split: mass exact, droplets in
 /// the box, no sheet left near the middle, each half a film from near the
 /// axis to its ring, and the split past the critical separation.
