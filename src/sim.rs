@@ -18,7 +18,7 @@
 
 use crate::emitter::Jet;
 use crate::film::driver as film_driver;
-use crate::film::step::film_speed;
+use crate::film::step::motion_speed;
 use crate::grid::MacGrid;
 use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed, SubstepRecord};
 use crate::io::ply::{self, frame_name, PlyError};
@@ -456,12 +456,18 @@ impl Sim {
             let rem = t_end - self.time;
             let (dt, last) = if self.params.film.is_some() {
                 // sheets, filaments and droplets only: motion per substep
-                // at most `film.cfl` particle spacings
+                // at most `film.cfl` particle spacings (droplets
+                // `film.point_cfl`)
+                let film = &self.scene.film;
                 film_driver::substep(
                     self.scene.time.max_dt,
-                    self.scene.film.cfl,
+                    film.cfl,
                     film_spacing,
-                    film_speed(&self.state.particles),
+                    motion_speed(
+                        &self.state.particles,
+                        film.cfl,
+                        film.point_cfl.unwrap_or(film.cfl),
+                    ),
                     rem,
                 )
             } else {

@@ -374,11 +374,16 @@ fn past_critical(t: f64, what: &str) {
 
 #[test]
 fn catenoid_pinch_preset_splits_into_two_films_spanning_the_rings() {
-    // the shipped preset (s = 2 mm): the neck pinches in frame 13 and the
-    // film splits into two films, each spanning its ring as a disk (paper
-    // Fig. 6), with a few droplets between them; mass stays exact
+    // the shipped preset at s = 2 mm (Δx 0.006, 3,220 particles; the paper's
+    // 63,888 by default): the neck pinches in frame 13 and the film splits
+    // into two films, each spanning its ring as a disk (paper Fig. 6), with
+    // a few droplets between them; mass stays exact
     let tmp = tempfile::tempdir().unwrap();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/catenoid_pinch.yaml");
+    let scene = preset_with(
+        tmp.path(),
+        "catenoid_pinch",
+        &[("dx: 0.00133 ", "dx: 0.006 ")],
+    );
     let (sim, torn) = splits_into_two_spanning_films(&scene, tmp.path(), 16);
     // at Table 2's Δt = 5 ms with the diffusive split (the full implicit
     // tension tears this spacing at 5 ms in frame 7, at d = 1.0 R, after two
@@ -411,7 +416,7 @@ fn both_half_films_survive_the_pinch_at_a_neighbouring_spacing() {
         tmp.path(),
         "catenoid_pinch",
         &[
-            ("dx: 0.006 ", "dx: 0.0061 "),
+            ("dx: 0.00133 ", "dx: 0.0061 "),
             ("max_dt: 0.005 ", "max_dt: 0.0025 "),
             ("implicit: diffusive ", "implicit: full "),
         ],
@@ -430,7 +435,7 @@ fn both_half_films_survive_the_pinch_at_the_papers_step() {
     let scene = preset_with(
         tmp.path(),
         "catenoid_pinch",
-        &[("dx: 0.006 ", "dx: 0.0058 ")],
+        &[("dx: 0.00133 ", "dx: 0.0058 ")],
     );
     splits_into_two_spanning_films(&scene, tmp.path(), 18);
 }
@@ -448,11 +453,7 @@ fn the_papers_63k_film_holds_at_5_ms_where_its_rows_stretch() {
     // pinch", session 22)
     use codimfx::particles::Codim;
     let tmp = tempfile::tempdir().unwrap();
-    let scene = preset_with(
-        tmp.path(),
-        "catenoid_pinch",
-        &[("dx: 0.006 ", "dx: 0.00133 "), ("fps: 30\n", "fps: 300\n")],
-    );
+    let scene = preset_with(tmp.path(), "catenoid_pinch", &[("fps: 30\n", "fps: 300\n")]);
     let mut sim = open(&scene, tmp.path(), 26, false);
     assert_eq!(sim.state.particles.len(), 63_888);
     sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();

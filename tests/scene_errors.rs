@@ -263,6 +263,9 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
     )
     .unwrap();
     assert_eq!(d.film.implicit, codimfx::scene::FilmImplicit::Diffusive);
+    assert_eq!(s.film.point_cfl, None);
+    let e = err(&format!("{GOOD}film:\n  point_cfl: -1\n"));
+    check(&e, "film.point_cfl", 24, "(0, 1000]");
     let e = err(&format!("{GOOD}film:\n  implicit: half\n"));
     assert!(e.to_string().contains("unknown variant `half`"), "{e}");
     assert_eq!(e.path(), "film.implicit", "{e}");

@@ -6,7 +6,7 @@
 use super::step::step;
 use super::{FilmError, FilmParams, FilmState, FilmStepInfo};
 use crate::math::Real;
-use crate::particles::Particles;
+use crate::particles::{Codim, Particles};
 
 /// Largest particle speed, the motion limit's input. Points (C = 3) count
 /// too although they move ballistically: leaving them out lengthened the
@@ -15,6 +15,25 @@ use crate::particles::Particles;
 /// so the rim needs those shorter steps (`docs/decisions.md`).
 pub fn film_speed(p: &Particles) -> Real {
     p.v.iter().map(|v| v.norm()).fold(0.0, Real::max)
+}
+
+/// The speed the substep's motion limit divides `cfl` × spacing by: the
+/// largest speed of the sheet and filament particles, and of the points
+/// (C = 3) scaled by `cfl / point_cfl`, so that a point moves at most
+/// `point_cfl` spacings per substep. With `point_cfl == cfl` it is
+/// [`film_speed`].
+pub fn motion_speed(p: &Particles, cfl: Real, point_cfl: Real) -> Real {
+    let ratio = cfl / point_cfl;
+    (0..p.len())
+        .map(|i| {
+            let s = p.v[i].norm();
+            if p.codim[i] == Codim::Point {
+                s * ratio
+            } else {
+                s
+            }
+        })
+        .fold(0.0, Real::max)
 }
 
 /// Runs [`step`], halving the step (up to `max_halvings` times) when a
@@ -86,4 +105,30 @@ pub fn advance_by(
         n += 1;
     }
     Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    #[test]
+    fn points_enter_the_motion_limit_at_their_own_cfl() {
+        let mut p = Particles::new();
+        let o = Vec3::zeros();
+        p.push(o, Vec3::new(0.0, 0.3, 0.4), 1.0, 1.0, Codim::Sheet);
+        p.push(o, Vec3::new(1.0, 0.0, 0.0), 1.0, 1.0, Codim::Filament);
+        p.push(o, Vec3::new(0.0, 0.0, -4.0), 1.0, 1.0, Codim::Point);
+        // the same cfl for all: the largest speed, a point's
+        assert_eq!(motion_speed(&p, 0.5, 0.5), film_speed(&p));
+        assert_eq!(motion_speed(&p, 0.5, 0.5), 4.0);
+        // a point may move 4x further: 4 m/s counts as 1 m/s, the filament's
+        assert_eq!(motion_speed(&p, 0.5, 2.0), 1.0);
+        // 8x: the filament's 1 m/s sets the step, the point's 0.5 does not
+        assert_eq!(motion_speed(&p, 0.5, 4.0), 1.0);
+        // the filament at rest: the sheet's 0.5 m/s, the point's 0.125 not
+        p.v[1] = Vec3::zeros();
+        assert_eq!(motion_speed(&p, 0.5, 16.0), 0.5);
+        assert_eq!(motion_speed(&p, 0.5, 2.0), 1.0);
+    }
 }

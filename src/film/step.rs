@@ -25,7 +25,7 @@
 //! matrix rows share one index; the store is rebuilt at the end with the
 //! other particles first, in their previous order.
 
-pub use super::advance::{advance_by, film_speed, step_with_retry};
+pub use super::advance::{advance_by, film_speed, motion_speed, step_with_retry};
 use super::{FilmError, FilmParams, FilmState, FilmStepInfo};
 use crate::coupling::surface::{particle_terms, SurfaceParams};
 use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_drag};

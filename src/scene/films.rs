@@ -146,6 +146,14 @@ pub struct FilmSettings {
     /// Largest motion per substep, in particle spacings.
     #[serde(default = "default_film_cfl")]
     pub cfl: f64,
+    /// Largest motion per substep of a droplet (point particle), in particle
+    /// spacings; `cfl` when absent. In a film scene a droplet moves
+    /// ballistically (gravity and drag) and meets nothing but the domain box,
+    /// so this bounds no error of the droplets' own: it sets how much fast
+    /// droplets shorten the films' substeps (docs/decisions.md, "Motion limit
+    /// and points").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point_cfl: Option<f64>,
     /// Speed limit (m/s) applied as a counted fallback; 0 = none.
     #[serde(default)]
     pub max_speed: f64,
@@ -195,6 +203,7 @@ impl Default for FilmSettings {
             transitions: true,
             reseed: true,
             cfl: default_film_cfl(),
+            point_cfl: None,
             max_speed: 0.0,
             solver_tolerance: default_film_tol(),
             solver_max_iterations: default_film_iters(),
@@ -345,6 +354,14 @@ pub fn validate(s: &Scene) -> Check {
             "film.cfl",
             format!("must be in (0, 2] spacings, got {}", f.cfl),
         );
+    }
+    if let Some(c) = f.point_cfl {
+        if !(c.is_finite() && c > 0.0 && c <= 1000.0) {
+            return fail(
+                "film.point_cfl",
+                format!("must be in (0, 1000] spacings, got {c}"),
+            );
+        }
     }
     if !(f.max_speed.is_finite() && f.max_speed >= 0.0) {
         return fail(
