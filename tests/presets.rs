@@ -1,6 +1,7 @@
 //! Every preset in `presets/` loads, validates and samples its initial state;
 //! the droplet scenes' initial particle counts are within 30 % of the paper's
-//! Table 1 (#C0, #C1), and the jet scenes emit the paper's flux. Counts are
+//! Table 1 (#C0, #C1), the film scenes start with its #C1 (catenoid 63k,
+//! bursting bubble 70k), and the jet scenes emit the paper's flux. Counts are
 //! printed (`cargo test --release --test presets -- --nocapture`).
 use codimfx::particles::{Codim, Particles};
 use codimfx::scene::{load, load_str_scaled, sample_bodies, sample_films, Scene};
@@ -176,5 +177,29 @@ fn every_preset_runs_at_half_resolution_with_fewer_particles() {
                 p.display()
             );
         }
+    }
+}
+
+#[test]
+fn the_film_presets_start_with_table_1s_particle_counts() {
+    // Table 1's #C1 for the film scenes that start as one sampled film: the
+    // film catenoid (63k; the static and the pinching preset share the
+    // film) and the bursting bubble (70k). The blowing bubble's 239k counts
+    // the separate bubbles it blows, which a ring's membrane does not start
+    // with.
+    for (name, want) in [
+        ("catenoid", 63e3),
+        ("catenoid_pinch", 63e3),
+        ("bursting_bubble", 70e3),
+    ] {
+        let s = load(Path::new(&format!("presets/{name}.yaml"))).unwrap();
+        assert!(!s.has_liquid(), "{name}: a film scene");
+        let p = initial(&s);
+        let sheet = p.counts()[Codim::Sheet as usize] as f64;
+        let r = sheet / want;
+        assert!(
+            (0.95..=1.1).contains(&r),
+            "{name}: {sheet} sheet particles, {r:.3} x Table 1's {want}"
+        );
     }
 }
