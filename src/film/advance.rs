@@ -12,16 +12,17 @@ use crate::particles::{Codim, Particles};
 /// too although they move ballistically: leaving them out lengthened the
 /// bursting bubble's substeps once droplets formed and changed its rim speed
 /// in the sixth frame (s = 4 mm) from 1.14 to 1.40 m/s (Taylor–Culick 1.0),
-/// so the rim needs those shorter steps (`docs/decisions.md`).
+/// so the rim needs those shorter steps (`docs/decisions.md`). Scenes may
+/// let points move further ([`motion_speed`], `film.point_cfl`).
 pub fn film_speed(p: &Particles) -> Real {
-    p.v.iter().map(|v| v.norm()).fold(0.0, Real::max)
+    motion_speed(p, 1.0, 1.0)
 }
 
 /// The speed the substep's motion limit divides `cfl` × spacing by: the
 /// largest speed of the sheet and filament particles, and of the points
 /// (C = 3) scaled by `cfl / point_cfl`, so that a point moves at most
-/// `point_cfl` spacings per substep. With `point_cfl == cfl` it is
-/// [`film_speed`].
+/// `point_cfl` spacings per substep. With `point_cfl == cfl` it is the
+/// largest speed of all, [`film_speed`].
 pub fn motion_speed(p: &Particles, cfl: Real, point_cfl: Real) -> Real {
     let ratio = cfl / point_cfl;
     (0..p.len())
