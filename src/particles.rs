@@ -123,6 +123,22 @@ impl Particles {
         self.fixed.extend(other.fixed);
     }
 
+    /// Reorders the store: particle k becomes the old particle `order[k]`
+    /// (`order` is a permutation of `0..len`).
+    pub fn permute(&mut self, order: &[usize]) {
+        assert_eq!(order.len(), self.len(), "permutation length");
+        fn take<T: Clone>(v: &mut Vec<T>, order: &[usize]) {
+            *v = order.iter().map(|&i| v[i].clone()).collect();
+        }
+        take(&mut self.x, order);
+        take(&mut self.v, order);
+        take(&mut self.mass, order);
+        take(&mut self.radius, order);
+        take(&mut self.codim, order);
+        take(&mut self.id, order);
+        take(&mut self.fixed, order);
+    }
+
     /// Keeps the particles for which `keep[i]` is true, preserving order.
     pub fn retain(&mut self, keep: &[bool]) {
         assert_eq!(keep.len(), self.len(), "retain mask length");
@@ -153,9 +169,18 @@ impl Particles {
         n
     }
 
-    /// Total mass (kg), summed in store order (deterministic).
+    /// Total mass (kg), summed in id order (deterministic).
     pub fn total_mass(&self) -> Real {
-        self.mass.iter().sum()
+        // summed in id order, so the sum does not depend on the order of
+        // the store ([`spatial_order`] reorders it every frame)
+        let mut m: Vec<(u64, Real)> = self
+            .id
+            .iter()
+            .copied()
+            .zip(self.mass.iter().copied())
+            .collect();
+        m.sort_unstable_by_key(|e| e.0);
+        m.iter().map(|e| e.1).sum()
     }
 
     /// True when every position, velocity, mass and radius is finite.
@@ -165,6 +190,48 @@ impl Particles {
             && self.mass.iter().all(|m| m.is_finite())
             && self.radius.iter().all(|r| r.is_finite())
     }
+}
+
+/// Largest cell coordinate per axis of [`spatial_order`] (21 bits).
+const MORTON_MAX: u64 = (1 << 21) - 1;
+
+/// Spreads the low 21 bits of `v` to every third bit (bit k → bit 3k).
+fn spread3(mut v: u64) -> u64 {
+    v &= MORTON_MAX;
+    v = (v | v << 32) & 0x001f_0000_0000_ffff;
+    v = (v | v << 16) & 0x001f_0000_ff00_00ff;
+    v = (v | v << 8) & 0x100f_00f0_0f00_f00f;
+    v = (v | v << 4) & 0x10c3_0c30_c30c_30c3;
+    (v | v << 2) & 0x1249_2492_4924_9249
+}
+
+/// The store's indices in Morton (Z-curve) order of the cells of size
+/// `cell` that hold the particles, ties broken by id: particles close in
+/// space come close in memory. A pure function of positions and ids, so a
+/// resumed run orders its particles as the run it continues.
+///
+/// Why: reseeding appends new particles at the end and removal compacts in
+/// place, so after a few frames of a stretching film the neighbours of a
+/// particle lie all over memory; every stage that walks neighbour lists (MLS
+/// fits, forces, reseeding, the ILU(0) of the tension solve) then misses
+/// the cache (docs/decisions.md, "Particles in space order").
+pub fn spatial_order(p: &Particles, cell: Real) -> Vec<usize> {
+    let lo =
+        p.x.iter()
+            .fold(Vec3::repeat(Real::INFINITY), |m, x| m.inf(x));
+    let q = |t: Real| ((t / cell).max(0.0) as u64).min(MORTON_MAX);
+    let mut keys: Vec<(u64, u64, usize)> =
+        p.x.iter()
+            .zip(&p.id)
+            .enumerate()
+            .map(|(i, (x, &id))| {
+                let d = x - lo;
+                let key = spread3(q(d.x)) | spread3(q(d.y)) << 1 | spread3(q(d.z)) << 2;
+                (key, id, i)
+            })
+            .collect();
+    keys.sort_unstable();
+    keys.into_iter().map(|k| k.2).collect()
 }
 
 #[cfg(test)]
@@ -191,6 +258,52 @@ mod tests {
         assert_eq!(p.codim, vec![Codim::Volume, Codim::Filament, Codim::Volume]);
         assert_eq!(p.counts(), [2, 0, 1, 0]);
         assert_eq!(p.next_id, 5);
+    }
+
+    #[test]
+    fn spatial_order_is_a_permutation_that_keeps_columns_aligned_and_groups_cells() {
+        // particles of four far-apart cells, pushed in interleaved order
+        let mut p = Particles::new();
+        let corners = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(9.0, 0.0, 0.0),
+            Vec3::new(0.0, 9.0, 0.0),
+            Vec3::new(0.0, 0.0, 9.0),
+        ];
+        for k in 0..12 {
+            let c = corners[k % 4] + Vec3::repeat(0.1 * (k / 4) as Real);
+            p.push(
+                c,
+                Vec3::new(k as Real, 0.0, 0.0),
+                k as Real,
+                0.1,
+                Codim::Sheet,
+            );
+        }
+        let order = spatial_order(&p, 1.0);
+        let mut seen = order.clone();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..12).collect::<Vec<_>>());
+        let mut q = p.clone();
+        q.permute(&order);
+        for k in 0..12 {
+            // every column moved together: id k carries mass k and v.x = k
+            assert_eq!(q.mass[k], q.id[k] as Real);
+            assert_eq!(q.v[k].x, q.id[k] as Real);
+        }
+        // each cell's three particles are contiguous, in id order, and the
+        // cells follow the Z-curve: (0,0,0), x, y, z
+        let ids: Vec<u64> = q.id.clone();
+        assert_eq!(ids, vec![0, 4, 8, 1, 5, 9, 2, 6, 10, 3, 7, 11]);
+        // a pure function of the particles
+        assert_eq!(spatial_order(&q, 1.0), (0..12).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn spread3_interleaves_bits() {
+        assert_eq!(spread3(0b1), 0b1);
+        assert_eq!(spread3(0b11), 0b1001);
+        assert_eq!(spread3(MORTON_MAX), 0x1249_2492_4924_9249);
     }
 
     #[test]

@@ -24,7 +24,7 @@ use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Spee
 use crate::io::ply::{self, frame_name, PlyError};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
-use crate::particles::{Codim, Particles};
+use crate::particles::{spatial_order, Codim, Particles};
 use crate::scene::{self, sample_bodies, sample_films, Scene, SceneError, Transfer};
 use crate::solids::SolidSet;
 use crate::step::{cfl_dt, step, SimState, StageTimes, StepError, StepParams};
@@ -434,6 +434,17 @@ impl Sim {
         })
     }
 
+    /// Reorders the particles by [`spatial_order`] on cells of size `cell`;
+    /// the APIC data follow them.
+    fn sort_particles(&mut self, cell: Real) {
+        let order = spatial_order(&self.state.particles, cell);
+        self.state.particles.permute(&order);
+        if !self.state.affine.is_empty() {
+            let a = std::mem::take(&mut self.state.affine);
+            self.state.affine = order.iter().map(|&i| a[i]).collect();
+        }
+    }
+
     /// Simulates and writes the next frame; returns its record.
     pub fn advance_frame(&mut self) -> Result<FrameRecord, SimError> {
         let wall = Instant::now();
@@ -447,6 +458,8 @@ impl Sim {
         let film_spacing = film_driver::spacing(&self.scene);
         // each frame's first coupled solve starts cold: what a resumed run sees
         self.state.warm = None;
+        // and its particles in space order (so does a resumed run's)
+        self.sort_particles(dx);
         // a failed coupled solve is retried from the same state with half the
         // substep (at most MAX_HALVINGS times in a row); the cap then holds
         // for the rest of the frame

@@ -45,7 +45,10 @@ fn mass_is_conserved_and_no_particle_enters_a_solid_with_large_frame_steps() {
     sim.run(&AtomicBool::new(false), |s, r| {
         let p = &s.state.particles;
         assert_eq!(p.len(), n0, "frame {}: particle count", r.frame);
-        assert_eq!(p.id, p0.id, "frame {}: ids", r.frame);
+        // the same particles (each frame reorders the store in space)
+        let mut ids = p.id.clone();
+        ids.sort_unstable();
+        assert_eq!(ids, p0.id, "frame {}: ids", r.frame);
         assert_eq!(p.total_mass(), m0, "frame {}: total mass", r.frame);
         assert_eq!(r.total_mass, m0);
         assert!(p.all_finite());
