@@ -127,32 +127,29 @@ impl Particles {
     /// (`order` is a permutation of `0..len`).
     pub fn permute(&mut self, order: &[usize]) {
         assert_eq!(order.len(), self.len(), "permutation length");
-        fn take<T: Clone>(v: &mut Vec<T>, order: &[usize]) {
-            *v = order.iter().map(|&i| v[i].clone()).collect();
-        }
-        take(&mut self.x, order);
-        take(&mut self.v, order);
-        take(&mut self.mass, order);
-        take(&mut self.radius, order);
-        take(&mut self.codim, order);
-        take(&mut self.id, order);
-        take(&mut self.fixed, order);
+        self.select(order);
     }
 
     /// Keeps the particles for which `keep[i]` is true, preserving order.
     pub fn retain(&mut self, keep: &[bool]) {
         assert_eq!(keep.len(), self.len(), "retain mask length");
-        fn compact<T: Clone>(v: &mut Vec<T>, keep: &[bool]) {
-            let mut k = keep.iter();
-            v.retain(|_| *k.next().unwrap());
+        let kept: Vec<usize> = (0..keep.len()).filter(|&i| keep[i]).collect();
+        self.select(&kept);
+    }
+
+    /// Keeps the particles `idx`, in that order: particle k becomes the old
+    /// particle `idx[k]`. Every column moves together.
+    fn select(&mut self, idx: &[usize]) {
+        fn take<T: Clone>(v: &mut Vec<T>, idx: &[usize]) {
+            *v = idx.iter().map(|&i| v[i].clone()).collect();
         }
-        compact(&mut self.x, keep);
-        compact(&mut self.v, keep);
-        compact(&mut self.mass, keep);
-        compact(&mut self.radius, keep);
-        compact(&mut self.codim, keep);
-        compact(&mut self.id, keep);
-        compact(&mut self.fixed, keep);
+        take(&mut self.x, idx);
+        take(&mut self.v, idx);
+        take(&mut self.mass, idx);
+        take(&mut self.radius, idx);
+        take(&mut self.codim, idx);
+        take(&mut self.id, idx);
+        take(&mut self.fixed, idx);
     }
 
     /// Indices of the particles of one codimension, in store order.
