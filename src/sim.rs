@@ -345,6 +345,9 @@ impl Sim {
                 if let (Some(g), Some(v0)) = (st.gas.as_mut(), rec.gas_v0) {
                     g.v0 = v0;
                 }
+                if let Some(a) = &rec.air {
+                    st.air.bubbles = a.bubbles.clone();
+                }
                 st
             });
             // every frame ends at exactly t = f / fps; recomputing it avoids
@@ -524,6 +527,9 @@ impl Sim {
                     speed: j.speed,
                 })
                 .collect();
+            if let Some(fs) = self.state.film.as_mut() {
+                fs.time = self.time;
+            }
             let info = match step(&mut self.state, &self.params, dt, &mut times) {
                 Ok(info) => info,
                 Err(source) => match before {
@@ -578,6 +584,17 @@ impl Sim {
                 }
                 rec.fallbacks.step_halvings += fs.halvings as u64;
                 rec.fallbacks.speed_clamps += fs.speed_clamps as u64;
+                if let Some(a) = &fs.info.air {
+                    let r = rec.air.get_or_insert_with(Default::default);
+                    r.new_bubbles += a.new_bubbles as u32;
+                    r.burst += a.burst as u32;
+                    r.bag_pressure_max = r.bag_pressure_max.max(a.bag_pressure);
+                    r.bag_pressure_min = r.bag_pressure_min.min(a.bag_pressure);
+                    r.mouth_radius = a.mouth_radius;
+                    r.mouth_offset = a.mouth_offset;
+                    r.bag_volume = a.bag_volume;
+                    r.bubble_volume_error = r.bubble_volume_error.max(a.bubble_volume_error);
+                }
                 continue;
             }
             let s = &info.pressure.solve;
@@ -622,6 +639,9 @@ impl Sim {
         }
         if let Some(fs) = &self.state.film {
             rec.gas_v0 = fs.gas.map(|g| g.v0);
+            if let Some(r) = rec.air.as_mut() {
+                r.bubbles = fs.air.bubbles.clone();
+            }
         }
         let p = &self.state.particles;
         let affine =

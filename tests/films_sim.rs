@@ -190,7 +190,7 @@ fn blow(
     frames: u32,
     apex: impl Fn(&codimfx::particles::Particles) -> (f64, f64),
 ) -> (Sim, f64, Vec<(f64, f64)>, f64) {
-    let scene = preset_with(dir, "blowing_bubble", edits);
+    let scene = preset_with(dir, "blowing_bag", edits);
     let (sigma, rho_air, drag) = (0.01, 1.2, 1.0);
     let r_pred = 4.0 * sigma / (drag * rho_air * w * w);
     let mut sim = open(&scene, dir, frames, false);

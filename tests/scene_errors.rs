@@ -317,3 +317,75 @@ fn the_presets_load() {
         load(Path::new(p)).unwrap_or_else(|e| panic!("{e}"));
     }
 }
+
+const RING: &str = "\
+version: 1
+domain:
+  min: [-0.05, -0.05, -0.05]
+  max: [0.05, 0.1, 0.05]
+  dx: 0.005
+time:
+  fps: 30
+  frames: 10
+physics:
+  density: 1000
+  surface_tension: 0.01
+films:
+  - kind: disk
+    center: [0, 0, 0]
+    normal: [0, 1, 0]
+    radius: 0.02
+film:
+  wind:
+    velocity: [0, 3, 0]
+";
+
+#[test]
+fn wind_jets_gusts_and_bag_air_are_checked() {
+    let s = load_str(
+        &format!("{RING}    radius: 0.008\n    gust: {{duration: 0.03, period: 0.45}}\n  bag_air: true\n"),
+        Path::new("scene.yaml"),
+    )
+    .unwrap();
+    let w = s.film.wind.as_ref().unwrap();
+    assert_eq!(w.radius, Some(0.008));
+    assert_eq!(w.origin, [0.0; 3]);
+    let g = w.gust.as_ref().unwrap();
+    assert_eq!((g.start, g.duration, g.period), (0.0, 0.03, 0.45));
+    assert!(s.film.bag_air);
+    // the solver's wind: a jet that blows during its gusts only
+    let prm = codimfx::film::driver::params_from_scene(&s);
+    let wind = prm.wind.unwrap();
+    let on_axis = codimfx::math::Vec3::new(0.0, 0.05, 0.0);
+    let outside = codimfx::math::Vec3::new(0.009, 0.05, 0.0);
+    assert_eq!(wind.at(0.01, &on_axis).y, 3.0);
+    assert_eq!(wind.at(0.01, &outside).y, 0.0);
+    assert_eq!(wind.at(0.04, &on_axis).y, 0.0, "between gusts");
+    assert_eq!(wind.at(0.46, &on_axis).y, 3.0, "the second gust");
+    assert!(wind.jet_blowing(0.46) && !wind.jet_blowing(0.2));
+    // the bag's axis is the disk's normal, turned to point with the wind
+    let air = prm.air.unwrap();
+    assert_eq!((air.axis.y, air.ring_radius), (1.0, 0.02));
+    let e = err(&format!("{RING}  bag_air: true\n")
+        .replace("velocity: [0, 3, 0]\n", "")
+        .replace("  wind:\n", ""));
+    assert_eq!(e.path(), "film.bag_air", "{e}");
+    assert!(e.to_string().contains("needs film.wind"), "{e}");
+    let no_disk = RING
+        .replace("kind: disk", "kind: sphere")
+        .replace("    normal: [0, 1, 0]\n", "");
+    let e = err(&format!("{no_disk}  bag_air: true\n"));
+    assert_eq!(e.path(), "film.bag_air", "{e}");
+    assert!(e.to_string().contains("`disk` film"), "{e}");
+    let e = err(&format!("{RING}    radius: -0.008\n"));
+    assert_eq!(e.path(), "film.wind.radius", "{e}");
+    let e = err(&format!(
+        "{RING}    gust: {{duration: 0.05, period: 0.02}}\n"
+    ));
+    assert_eq!(e.path(), "film.wind.gust.period", "{e}");
+    assert!(e.to_string().contains("at least the duration 0.05"), "{e}");
+    let e = err(&format!("{RING}    gust: {{duration: 0}}\n"));
+    assert_eq!(e.path(), "film.wind.gust.duration", "{e}");
+    let e = err(&format!("{RING}    gust: {{duration: 0.1, every: 2}}\n"));
+    assert!(e.to_string().contains("unknown field `every`"), "{e}");
+}

@@ -4,7 +4,8 @@
 //! box, and the cache's frame vectors. The frame loop is [`crate::sim`]'s and
 //! the substep [`crate::step::step`]'s, as for every scene.
 
-use super::{FilmParams, FilmState, Wind};
+use super::air::AirParams;
+use super::{FilmParams, FilmState, Gust, Wind};
 use crate::gas::GasPocket;
 use crate::linsolve::BicgstabParams;
 use crate::math::{Real, Vec3};
@@ -31,7 +32,37 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
         velocity: Vec3::from(w.velocity),
         air_density: w.air_density,
         drag: w.drag,
+        gust: w.gust.as_ref().map(|g| Gust {
+            start: g.start,
+            duration: g.duration,
+            period: g.period,
+            between: g.between,
+        }),
+        radius: w.radius,
+        origin: Vec3::from(w.origin),
     });
+    // the bag hangs from the first disk's ring, its axis along the wind
+    if let (true, Some(w)) = (f.bag_air, &prm.wind) {
+        if let Some(FilmBody::Disk {
+            center,
+            normal,
+            radius,
+            ..
+        }) = s.films.iter().find(|b| matches!(b, FilmBody::Disk { .. }))
+        {
+            let mut axis = Vec3::from(*normal).normalize();
+            if axis.dot(&w.velocity) < 0.0 {
+                axis = -axis;
+            }
+            prm.air = Some(AirParams::new(
+                Vec3::from(*center),
+                axis,
+                *radius,
+                w.air_density,
+                h,
+            ));
+        }
+    }
     if !f.transitions {
         prm.transitions = None;
     }
@@ -77,7 +108,10 @@ pub fn initial_state(s: &Scene) -> FilmState {
             ..GasPocket::balanced_sphere(r, s.physics.surface_tension, 0.0)
         }
     });
-    FilmState { gas }
+    FilmState {
+        gas,
+        ..FilmState::default()
+    }
 }
 
 /// Smallest film particle spacing of the scene (m).

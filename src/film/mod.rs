@@ -8,6 +8,7 @@
 //! tension. Scenes with a liquid volume use the coupled step instead.
 
 pub mod advance;
+pub mod air;
 pub mod catenoid;
 pub mod deformation;
 pub mod driver;
@@ -29,6 +30,84 @@ pub struct Wind {
     pub air_density: Real,
     /// Drag coefficient (dimensionless).
     pub drag: Real,
+    /// Gusts: the wind blows only during these windows; always when `None`.
+    pub gust: Option<Gust>,
+    /// A jet: the wind blows within this radius (m) of the line through
+    /// `origin` along the velocity (cosine taper over the outer quarter);
+    /// everywhere when `None`.
+    pub radius: Option<Real>,
+    /// A point on the jet's axis (m).
+    pub origin: Vec3,
+}
+
+/// Gusts of wind: on from `start` for `duration`, repeated every `period`
+/// (once when `period` is 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gust {
+    /// Start of the first gust (s).
+    pub start: Real,
+    /// Length of each gust (s).
+    pub duration: Real,
+    /// Time from one gust's start to the next (s); 0 for a single gust.
+    pub period: Real,
+    /// Fraction of the velocity that blows between gusts, everywhere (a
+    /// uniform breeze that carries blown bubbles away); 0 for still air.
+    pub between: Real,
+}
+
+impl Wind {
+    /// Whether a gust (or the steady wind) blows at time `t`; between gusts
+    /// the wind blows at the `between` fraction of its velocity (still air
+    /// when 0, whose drag still acts on moving films).
+    pub fn blowing(&self, t: Real) -> bool {
+        match &self.gust {
+            None => true,
+            Some(g) => {
+                let mut tt = t - g.start;
+                if tt >= 0.0 && g.period > 0.0 {
+                    tt %= g.period;
+                }
+                tt >= 0.0 && tt < g.duration
+            }
+        }
+    }
+
+    /// Whether a jet (a wind with a radius) blows a gust, or steadily, at
+    /// time `t`: the air it blows into a bag is trapped there ([`air`]).
+    /// The breeze between gusts flows around the film instead.
+    pub fn jet_blowing(&self, t: Real) -> bool {
+        self.radius.is_some() && self.blowing(t)
+    }
+
+    /// The wind's velocity at time `t` and point `x`.
+    pub fn at(&self, t: Real, x: &Vec3) -> Vec3 {
+        let scale = match &self.gust {
+            Some(g) if !self.blowing(t) => g.between,
+            _ => 1.0,
+        };
+        let Some(r) = self.radius else {
+            return self.velocity * scale;
+        };
+        if scale < 1.0 {
+            // the breeze between gusts blows everywhere
+            return self.velocity * scale;
+        }
+        let w = self.velocity.norm();
+        if w == 0.0 {
+            return Vec3::zeros();
+        }
+        let a = self.velocity / w;
+        let d = x - self.origin;
+        let rho = (d - a * d.dot(&a)).norm() / r;
+        let taper = if rho <= 0.75 {
+            1.0
+        } else if rho >= 1.0 {
+            0.0
+        } else {
+            0.5 * (1.0 + (std::f64::consts::PI * (rho - 0.75) / 0.25).cos())
+        };
+        self.velocity * taper
+    }
 }
 
 /// Parameters of the film step. Units are SI; lengths relative to h say so.
@@ -51,6 +130,8 @@ pub struct FilmParams {
     pub damping: Real,
     /// Wind on sheet particles.
     pub wind: Option<Wind>,
+    /// Air inside a blown bag and its bubbles ([`air`]); `None` for none.
+    pub air: Option<air::AirParams>,
     /// Codimension transitions (§8); `None` disables them.
     pub transitions: Option<TransitionParams>,
     /// Reseeding (§9); `None` disables it.
@@ -102,6 +183,7 @@ impl FilmParams {
             free_film: true,
             damping: 0.0,
             wind: None,
+            air: None,
             transitions: Some(TransitionParams::film(h)),
             reseed: Some(ReseedParams {
                 rim_gap: std::f64::consts::FRAC_PI_2,
@@ -123,6 +205,11 @@ impl FilmParams {
 pub struct FilmState {
     /// Gas enclosed by the film (bubbles), if any.
     pub gas: Option<GasPocket>,
+    /// Bubbles blown off a ring (`film.bag_air`).
+    pub air: air::AirState,
+    /// Time at the start of the next step (s): the frame loop sets it before
+    /// each substep; each step advances it.
+    pub time: Real,
 }
 
 /// Wall-clock seconds spent in each stage of one step (0 for skipped stages).
@@ -174,6 +261,8 @@ pub struct FilmStepInfo {
     pub fits: FitStats,
     /// Enclosed gas volume (m³), when the scene has gas.
     pub gas_volume: Option<Real>,
+    /// What the bag's and bubbles' air did (`film.bag_air`).
+    pub air: Option<air::AirInfo>,
     /// Stages 4–6 reused the neighbourhoods, frames and Laplacian rows of
     /// stage 2 (the particle set did not change in between).
     pub reused_neighborhoods: bool,

@@ -26,6 +26,9 @@
 //! other particles first, in their previous order.
 
 pub use super::advance::{advance_by, film_speed, motion_speed, step_with_retry};
+use super::air::{
+    stage as air_stage, survey as air_survey, trapped_jet, Sheets, Survey as AirSurvey,
+};
 use super::{FilmError, FilmParams, FilmState, FilmStepInfo};
 use crate::coupling::surface::{particle_terms, SurfaceParams};
 use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_drag};
@@ -341,6 +344,7 @@ pub fn step(
     if film.is_empty() {
         *parts = others;
         check(parts, "reseed")?;
+        state.time += dt;
         return Ok(info);
     }
 
@@ -384,7 +388,10 @@ pub fn step(
     }
     // enclosed gas and wind act along the sheet normals
     let mut drag: Vec<Real> = Vec::new();
-    if state.gas.is_some() || prm.wind.is_some() {
+    // oriented sheet normals and sheet neighbour lists, kept for the air
+    let mut sheet_geo: Option<(Vec<Vec3>, Vec<Vec<u32>>)> = None;
+    let mut survey: Option<AirSurvey> = None;
+    if state.gas.is_some() || prm.wind.is_some() || prm.air.is_some() {
         let mut normals: Vec<Vec3> = frames[..n_sheet].iter().map(|fr| fr.axis(2)).collect();
         let sheet_nbrs: Vec<Vec<u32>> = (0..n_sheet)
             .map(|i| {
@@ -417,13 +424,28 @@ pub fn step(
                 f[i] += fp;
             }
         }
+        // the air of a blown bag: while the jet blows, the walls of the bag
+        // feel its stagnation pressure instead of its drag
+        let mut in_jet_bag = vec![false; n_sheet];
+        if let Some(ap) = &prm.air {
+            let sheets = Sheets::of(&film, n_sheet, &voronoi, &normals);
+            let wind = prm.wind.as_ref();
+            let sv = air_survey(&sheets, |i| &sheet_nbrs[i], ap);
+            in_jet_bag = trapped_jet(&sheets, &sv, wind, state.time, &mut f);
+            survey = Some(sv);
+        }
         if let Some(w) = &prm.wind {
             drag = vec![0.0; n];
             for i in 0..n_sheet {
+                let wind_here = if in_jet_bag[i] {
+                    Vec3::zeros()
+                } else {
+                    w.at(state.time, &film.x[i])
+                };
                 // one-face area: the wind's pressure acts across the film;
                 // implicit in the normal velocity (`gas::wind_drag`)
                 let (d, fw) = wind_drag(
-                    &w.velocity,
+                    &wind_here,
                     &film.v[i],
                     &normals[i],
                     voronoi[i],
@@ -434,6 +456,7 @@ pub fn step(
                 f[i] += fw;
             }
         }
+        sheet_geo = Some((normals, sheet_nbrs));
     }
     info.timings.forces = t.elapsed().as_secs_f64();
 
@@ -477,11 +500,46 @@ pub fn step(
         source: e,
     })?;
     info.tension_solve = sol.info;
-    for i in 0..n {
+    let mut u_new = sol.u;
+    // 7. the air of a blown bag and its bubbles: one pressure per pocket,
+    //    implicit with the tension through a second solve with a probe
+    //    pressure in every pocket (`film::air`)
+    if let (Some(ap), Some((normals, _)), Some(sv)) = (&prm.air, &sheet_geo, &survey) {
+        let sheets = Sheets::of(&film, n_sheet, &voronoi, normals);
+        let jet = prm.wind.as_ref().is_some_and(|w| w.jet_blowing(state.time));
+        let probe = |fp: &[(usize, Vec3)]| {
+            let mut f_probe = f.clone();
+            for &(i, v) in fp {
+                f_probe[i] += v;
+            }
+            let sys = TensionSystem {
+                f_explicit: &f_probe,
+                ..sys
+            };
+            solve_tension(&sys, &prm.solver).map(|s| s.u)
+        };
+        let a = air_stage(
+            &sheets,
+            sv,
+            &mut u_new[..n_sheet],
+            ap,
+            &mut state.air,
+            dt,
+            jet,
+            probe,
+        )
+        .map_err(|e| FilmError::Solve {
+            stage: "bag air",
+            source: e,
+        })?;
+        info.air = Some(a);
+    }
+    for (i, v) in u_new.into_iter().enumerate().take(n) {
         if !film.fixed[i] {
-            film.v[i] = sol.u[i];
+            film.v[i] = v;
         }
     }
+    state.time += dt;
     info.timings.tension = t.elapsed().as_secs_f64();
     *parts = join(others, film);
     check(parts, "surface tension")?;

@@ -104,6 +104,30 @@ pub struct Fallbacks {
     pub mass_shift_bounded: u64,
 }
 
+/// The air of a blown bag over one frame (`film::air`).
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct AirRecord {
+    /// Bubbles at the end of the frame (rest volume, some particle ids).
+    pub bubbles: Vec<crate::film::air::Bubble>,
+    /// Bubbles that closed during the frame.
+    pub new_bubbles: u32,
+    /// Bubbles lost during the frame (burst, or joined to the ring's film).
+    #[serde(default)]
+    pub burst: u32,
+    /// Largest excess pressure in the bag over the frame's substeps (Pa).
+    pub bag_pressure_max: Real,
+    /// Smallest excess pressure in the bag (Pa; negative while it inflates).
+    pub bag_pressure_min: Real,
+    /// Radius of the bag's mouth at the frame's end (m).
+    pub mouth_radius: Real,
+    /// Distance of the mouth from the ring at the frame's end (m).
+    pub mouth_offset: Real,
+    /// Volume of the bag beyond its mouth at the frame's end (m³).
+    pub bag_volume: Real,
+    /// Largest relative volume error of a bubble over the frame.
+    pub bubble_volume_error: Real,
+}
+
 /// One frame's record.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct FrameRecord {
@@ -156,6 +180,10 @@ pub struct FrameRecord {
     /// Rest volume of the film's gas pocket (m³), needed to resume.
     #[serde(default)]
     pub gas_v0: Option<Real>,
+    /// The air of a blown bag and its bubbles (`film.bag_air`): the bubbles
+    /// at the frame's end (needed to resume) and the frame's figures.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub air: Option<AirRecord>,
     /// Particles emitted by jets during the frame.
     #[serde(default)]
     pub emitted: u64,

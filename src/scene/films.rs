@@ -85,6 +85,33 @@ pub struct WindSettings {
     /// Air density (kg/m³).
     #[serde(default = "air")]
     pub air_density: f64,
+    /// Gusts: the wind blows only during them (still air in between).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gust: Option<GustSettings>,
+    /// A jet of this radius (m) instead of a uniform wind.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// A point on the jet's axis (m); the axis runs along `velocity`.
+    #[serde(default)]
+    pub origin: [f64; 3],
+}
+
+/// `film.wind.gust`: on from `start` for `duration`, every `period` seconds
+/// (a single gust when `period` is 0 or absent).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GustSettings {
+    /// Start of the first gust (s).
+    #[serde(default)]
+    pub start: f64,
+    /// Length of each gust (s).
+    pub duration: f64,
+    /// Time between the starts of two gusts (s); 0 = one gust.
+    #[serde(default)]
+    pub period: f64,
+    /// Fraction of the velocity that blows between gusts (0 = still air).
+    #[serde(default)]
+    pub between: f64,
 }
 
 /// Saw-tooth modulation of the rim tension for the fluid polygon (§10.2,
@@ -134,6 +161,10 @@ pub struct FilmSettings {
     /// Wind on films.
     #[serde(default)]
     pub wind: Option<WindSettings>,
+    /// The air inside a film blown off its ring and inside the bubbles it
+    /// makes (`film::air`): needs `wind` and a `disk` film.
+    #[serde(default)]
+    pub bag_air: bool,
     /// MLS fit order of the tension operator (2–4; default 3).
     #[serde(default = "default_order")]
     pub order: usize,
@@ -199,6 +230,7 @@ impl Default for FilmSettings {
             damping: 0.0,
             gas: false,
             wind: None,
+            bag_air: false,
             order: default_order(),
             transitions: true,
             reseed: true,
@@ -386,6 +418,54 @@ pub fn validate(s: &Scene) -> Check {
             return fail("film.wind.drag", format!("must be >= 0, got {}", w.drag));
         }
         pos("film.wind.air_density".into(), w.air_density)?;
+        if let Some(r) = w.radius {
+            pos("film.wind.radius".into(), r)?;
+        }
+        if !w.origin.iter().all(|c| c.is_finite()) {
+            return fail("film.wind.origin", "must be finite");
+        }
+        if let Some(g) = &w.gust {
+            if !(g.start.is_finite() && g.start >= 0.0) {
+                return fail(
+                    "film.wind.gust.start",
+                    format!("must be >= 0, got {}", g.start),
+                );
+            }
+            pos("film.wind.gust.duration".into(), g.duration)?;
+            if !(g.period.is_finite() && g.period >= 0.0) {
+                return fail(
+                    "film.wind.gust.period",
+                    format!("must be >= 0, got {}", g.period),
+                );
+            }
+            if !(g.between.is_finite() && (0.0..=1.0).contains(&g.between)) {
+                return fail(
+                    "film.wind.gust.between",
+                    format!("must be in [0, 1], got {}", g.between),
+                );
+            }
+            if g.period > 0.0 && g.period < g.duration {
+                return fail(
+                    "film.wind.gust.period",
+                    format!(
+                        "must be 0 or at least the duration {}, got {}",
+                        g.duration, g.period
+                    ),
+                );
+            }
+        }
+    }
+    if f.bag_air && f.wind.is_none() {
+        return fail(
+            "film.bag_air",
+            "needs film.wind (the air that blows the bag)",
+        );
+    }
+    if f.bag_air && !s.films.iter().any(|b| matches!(b, FilmBody::Disk { .. })) {
+        return fail(
+            "film.bag_air",
+            "needs a `disk` film (the film on its ring is the bag)",
+        );
     }
     if let Some(m) = &f.rim_modulation {
         if m.corners < 2 {

@@ -72,6 +72,7 @@ fn bubble(s: Real) -> (Particles, FilmParams, FilmState, Real) {
             v0: 0.0,
             ..GasPocket::balanced_sphere(r, 5e-4, 0.0)
         }),
+        ..FilmState::default()
     };
     (p, prm, st, 0.002)
 }
