@@ -9,11 +9,15 @@
 //! 3. reseeding (§9), new particles lifted onto the local MLS fit; filament
 //!    insertion only along line-like filament frames;
 //! 4. control areas (Appendix D), thickness/radius from mass, explicit
-//!    forces: gravity, air drag, wind, enclosed gas, rim and bud tension
-//!    (§6); points move ballistically;
+//!    forces: gravity, air drag, wind (or a jet's trapped air in a blown
+//!    bag), enclosed gas, rim and bud tension (§6); points move
+//!    ballistically;
 //! 5. viscosity (§5, eq. 13) with the joint Laplacian, only when μ > 0;
 //! 6. semi-implicit surface tension (eq. 16) on the joint Laplacian with
-//!    the sheet weight in filament fits set to 0 (§7).
+//!    the sheet weight in filament fits set to 0 (§7);
+//! 7. with `film.bag_air`, the air of a blown bag and its bubbles
+//!    ([`super::air`]): one pressure per pocket, implicit with the tension
+//!    through a second tension solve with a probe pressure.
 //!
 //! Neighbourhoods and frames are built once after advection; stages 4–6
 //! reuse them when stages 2–3 changed nothing, and rebuild them once

@@ -10,38 +10,51 @@
 //! atmosphere's while the bag beyond it is held up, so the neck closes first
 //! and traps the air beyond it.
 //!
-//! Model (`film.bag_air`), applied after the tension solve of every film
-//! step, as a projection of the sheet velocities:
+//! Model (`film.bag_air`, docs/decisions.md "Bubbles blown off a ring"):
 //! - **Bag.** The sheet particles of the film that holds the ring, profiled
 //!   along the ring's axis a (through the ring's centre o, pointing with the
 //!   wind): bins of width h/2 in s = (x − o)·a; the section at the upstream
-//!   face of bin k has the radius R_k of the bin's widest wall particle (the
-//!   first section is the ring). The
-//!   air is incompressible: the walls beyond section k, left to tension and
-//!   wind, change the volume beyond it at the rate V̇_k = Σ A_i n_i·u_i
-//!   (one-face areas A_i, normals out of the bag), and that air crosses the
-//!   section at |V̇_k| / πR_k². While the bag empties, the *mouth* is the
-//!   section where that air is fastest: the lowest pressure (Bernoulli),
-//!   where the air leaves as a jet (while it fills, the mouth is the ring),
-//!   Q = sign(p) A_m √(2|p|/ρ_air)
-//!   (Bernoulli, discharge coefficient 1, A_m = π R_m²). The bag's excess
-//!   pressure p acts on the particles beyond the mouth along n, implicitly:
-//!   u_i ← u_i + Δt p A_i n_i / m_i, with p the root of
-//!   V̇(u) + c p + sign(p) A_m √(2|p|/ρ_air) = 0, c = Δt Σ A_i²/m_i (monotone
-//!   in p, one root, closed form in √|p|). The walls before the mouth feel no
-//!   air: that is the jet's region, at the atmosphere's pressure.
+//!   face of bin k has the radius R_k of the bin's widest wall particle, and
+//!   an area of at least the projected area of the bin's walls that face
+//!   downstream (the first section is the ring). The air is incompressible:
+//!   the walls beyond section k, left to tension and wind, change the volume
+//!   beyond it at the rate V̇_k = Σ A_i n_i·u_i (one-face areas A_i, normals
+//!   out of the bag), and that air crosses the section at v_k = |V̇_k| / πR_k².
+//!   While the bag empties, the *mouth* is the section where that air is
+//!   fastest (among those with a twentieth of the bag's volume beyond them):
+//!   the lowest pressure, where the air leaves as a jet at
+//!   Q = sign(p) A_m √(2|p|/ρ_air) (Bernoulli, discharge coefficient 1,
+//!   A_m = π R_m²); while it fills, the mouth is the ring. The bag's excess
+//!   pressure p acts along n on the walls beyond the mouth with the Bernoulli
+//!   profile p (1 − v_k²/v_m²): the air at rest at the far end has the bag's
+//!   pressure, the air in the mouth the atmosphere's, so the neck is not held
+//!   and closes. The walls before the mouth feel no air (the jet's region).
+//!   p is the root of V̇(u) + c p + sign(p) A_m √(2|p|/ρ_air) = 0, with c the
+//!   volume rate per pascal (monotone in p, one root, closed form in √|p|).
+//! - **Jet.** While a jet blows a gust ([`super::Wind::jet_blowing`]), the
+//!   air it blows into the bag is trapped there: every wall of the bag feels
+//!   the jet's stagnation pressure c_d ρ_air |w(x)|² ([`jet_forces`]) instead
+//!   of its drag, and the bag's air is not solved for.
 //! - **Bubbles.** A film that is no longer connected to the ring and whose
 //!   surface closes (|Σ A_i n_i| < 2 % of Σ A_i: a hole of radius at most
-//!   ~0.28 R) becomes a bubble of rest volume V_0, its enclosed volume then.
-//!   Its air cannot leave: p is the root of V̇(u) + β (V − V_0)/Δt + c p = 0
-//!   (β = 0.2 draws a volume drift back over a few steps). A bubble is
-//!   followed from step to step by a sample of its particles' ids.
+//!   ~0.28 R; sphericity at least 1/3) becomes a bubble of rest volume V_0,
+//!   its enclosed volume then. Its air cannot leave: p is the root of
+//!   V̇(u) + β (V − V_0)/Δt + c p = 0 (β = 0.2 draws a volume drift back over
+//!   a few steps). A bubble is followed from step to step by a sample of its
+//!   particles' ids; one that lost a third of its volume or joined the
+//!   ring's film has burst and lets its air go.
 //!
-//! The pressure is a Lagrange multiplier on the velocities (lumped particle
-//! masses), so it adds no stiffness: a 1 µm film carries 1e-3 kg/m², and an
-//! explicit gas spring stiff enough to hold a bag would need substeps far
-//! below the film's own. Air inertia and the unsteady Bernoulli term are
-//! neglected (the bag's air moves at a few m/s over centimetres).
+//! Each pressure is a Lagrange multiplier on the sheet velocities after the
+//! tension solve, implicit with the tension ([`stage`]): a second tension
+//! solve with a probe pressure in every pocket gives each pocket's response
+//! du per pascal (tension included; the pockets lie in separate components
+//! of the film, so one probe serves all), c = Σ A_i n_i·du_i, and
+//! u ← u + p du. Applied with lumped masses instead, the pressure pushed a
+//! stretched film's thin parts out faster than tension could answer within
+//! the step, and the film shattered; an explicit gas spring stiff enough to
+//! hold a 1 µm film (1e-3 kg/m²) would need substeps far below the film's
+//! own. Air inertia and the unsteady Bernoulli term are neglected (the bag's
+//! air moves at a few m/s over centimetres).
 
 use crate::math::{Real, Vec3};
 

@@ -31,6 +31,52 @@ fn neighbours(x: &[Vec3], h: Real) -> Vec<Vec<u32>> {
         .collect()
 }
 
+/// A test film's sheet data: uniform areas and masses, ids 0..n, its
+/// neighbour lists within `h`.
+struct Film {
+    x: Vec<Vec3>,
+    nrm: Vec<Vec3>,
+    fixed: Vec<bool>,
+    area: Vec<Real>,
+    mass: Vec<Real>,
+    id: Vec<u64>,
+    nb: Vec<Vec<u32>>,
+}
+
+impl Film {
+    fn new(
+        x: Vec<Vec3>,
+        nrm: Vec<Vec3>,
+        fixed: Vec<bool>,
+        area: Real,
+        mass: Real,
+        h: Real,
+    ) -> Film {
+        let n = x.len();
+        let nb = neighbours(&x, h);
+        Film {
+            x,
+            nrm,
+            fixed,
+            area: vec![area; n],
+            mass: vec![mass; n],
+            id: (0..n as u64).collect(),
+            nb,
+        }
+    }
+
+    fn sheets(&self) -> Sheets<'_> {
+        Sheets {
+            x: &self.x,
+            mass: &self.mass,
+            area: &self.area,
+            normals: &self.nrm,
+            fixed: &self.fixed,
+            id: &self.id,
+        }
+    }
+}
+
 fn params(h: Real) -> AirParams {
     AirParams::new(Vec3::zeros(), Vec3::new(0.0, 1.0, 0.0), 0.02, 1.2, h)
 }
@@ -67,20 +113,11 @@ fn a_free_closed_film_becomes_a_bubble_that_holds_its_volume() {
     let (r, h) = (0.01, 0.0025);
     let (x, nrm, area) = sphere(2000, r, Vec3::new(0.0, 0.05, 0.0));
     let n = x.len();
-    let nb = neighbours(&x, h);
-    let mass = vec![1e-9; n];
-    let fixed = vec![false; n];
-    let id: Vec<u64> = (0..n as u64).collect();
-    let s = Sheets {
-        x: &x,
-        mass: &mass,
-        area: &area,
-        normals: &nrm,
-        fixed: &fixed,
-        id: &id,
-    };
+    let film = Film::new(x, nrm, vec![false; n], area[0], 1e-9, h);
+    let (nrm, area, mass) = (&film.nrm, &film.area, &film.mass);
+    let s = film.sheets();
     let prm = params(h);
-    let sv = survey(&s, |i| &nb[i], &prm);
+    let sv = survey(&s, |i| &film.nb[i], &prm);
     assert!(sv.bag.is_empty(), "no ring: no bag");
     // tension alone shrinks it: every wall moves inwards at 0.3 m/s
     let mut u: Vec<Vec3> = nrm.iter().map(|m| -m * 0.3).collect();
@@ -122,20 +159,10 @@ fn an_open_cap_or_a_crumpled_sheet_is_no_bubble() {
     let pick = |v: &[Vec3]| keep.iter().map(|&i| v[i]).collect::<Vec<_>>();
     let (x, nrm) = (pick(&x), pick(&nrm));
     let n = x.len();
-    let area = vec![area[0]; n];
-    let nb = neighbours(&x, h);
-    let (mass, fixed) = (vec![1e-9; n], vec![false; n]);
-    let id: Vec<u64> = (0..n as u64).collect();
-    let s = Sheets {
-        x: &x,
-        mass: &mass,
-        area: &area,
-        normals: &nrm,
-        fixed: &fixed,
-        id: &id,
-    };
+    let cap = Film::new(x, nrm, vec![false; n], area[0], 1e-9, h);
+    let s = cap.sheets();
     let prm = params(h);
-    let sv = survey(&s, |i| &nb[i], &prm);
+    let sv = survey(&s, |i| &cap.nb[i], &prm);
     let mut st = AirState::default();
     let p = plan(&s, &sv, &vec![Vec3::zeros(); n], &prm, &mut st, 1e-4, false);
     assert_eq!((p.info.new_bubbles, p.pockets.len()), (0, 0));
@@ -146,19 +173,9 @@ fn an_open_cap_or_a_crumpled_sheet_is_no_bubble() {
     let nrm: Vec<Vec3> = (0..400)
         .map(|i| Vec3::new(0.0, if i % 2 == 0 { 1.0 } else { -1.0 }, 0.0))
         .collect();
-    let area = vec![1e-6; 400];
-    let nb = neighbours(&x, h);
-    let (mass, fixed) = (vec![1e-9; 400], vec![false; 400]);
-    let id: Vec<u64> = (0..400).collect();
-    let s = Sheets {
-        x: &x,
-        mass: &mass,
-        area: &area,
-        normals: &nrm,
-        fixed: &fixed,
-        id: &id,
-    };
-    let sv = survey(&s, |i| &nb[i], &prm);
+    let flat = Film::new(x, nrm, vec![false; 400], 1e-6, 1e-9, h);
+    let s = flat.sheets();
+    let sv = survey(&s, |i| &flat.nb[i], &prm);
     let p = plan(
         &s,
         &sv,
@@ -228,20 +245,11 @@ fn the_mouth_of_a_collapsing_bulb_is_its_neck() {
     let h = 0.0015;
     let (x, nrm, fixed) = bulb_on_a_ring(0.004);
     let n = x.len();
-    let nb = neighbours(&x, h);
-    let area = vec![0.0006 * 0.0006; n];
-    let mass = vec![1e-10; n];
-    let id: Vec<u64> = (0..n as u64).collect();
-    let s = Sheets {
-        x: &x,
-        mass: &mass,
-        area: &area,
-        normals: &nrm,
-        fixed: &fixed,
-        id: &id,
-    };
+    let film = Film::new(x, nrm, fixed, 0.0006 * 0.0006, 1e-10, h);
+    let (x, nrm, fixed, area, mass) = (&film.x, &film.nrm, &film.fixed, &film.area, &film.mass);
+    let s = film.sheets();
     let prm = params(h);
-    let sv = survey(&s, |i| &nb[i], &prm);
+    let sv = survey(&s, |i| &film.nb[i], &prm);
     assert_eq!(sv.bag.len(), n - 120, "one film on the ring");
     assert_eq!(sv.sign, 1.0);
     // every wall moves inwards: the bulb's air leaves through the neck
@@ -311,20 +319,11 @@ fn while_a_jet_blows_the_bag_is_left_to_its_stagnation_pressure() {
     let h = 0.0015;
     let (x, nrm, fixed) = bulb_on_a_ring(0.004);
     let n = x.len();
-    let nb = neighbours(&x, h);
-    let area = vec![0.0006 * 0.0006; n];
-    let mass = vec![1e-10; n];
-    let id: Vec<u64> = (0..n as u64).collect();
-    let s = Sheets {
-        x: &x,
-        mass: &mass,
-        area: &area,
-        normals: &nrm,
-        fixed: &fixed,
-        id: &id,
-    };
+    let film = Film::new(x, nrm, fixed, 0.0006 * 0.0006, 1e-10, h);
+    let (nrm, area) = (&film.nrm, &film.area);
+    let s = film.sheets();
     let prm = params(h);
-    let sv = survey(&s, |i| &nb[i], &prm);
+    let sv = survey(&s, |i| &film.nb[i], &prm);
     let u = vec![Vec3::zeros(); n];
     let p = plan(&s, &sv, &u, &prm, &mut AirState::default(), 1e-4, true);
     assert!(p.pockets.is_empty());
