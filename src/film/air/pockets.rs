@@ -263,26 +263,25 @@ pub fn plan(
     plan
 }
 
-/// Enclosed volume ⅓ Σ A (x − c)·n of the members (outward normals: the
-/// sign of the sum is taken so that a closed film's volume is positive).
-fn volume(s: &Sheets, m: &[usize]) -> Real {
+/// ⅓ Σ A (x − c)·n over the members, c their centroid: the enclosed volume
+/// of a closed film, positive when its normals point outward.
+fn signed_volume(s: &Sheets, m: &[usize]) -> Real {
     let c: Vec3 = m.iter().map(|&i| s.x[i]).sum::<Vec3>() / m.len() as Real;
-    (m.iter()
+    m.iter()
         .map(|&i| s.area[i] * (s.x[i] - c).dot(&s.normals[i]))
         .sum::<Real>()
-        / 3.0)
-        .abs()
+        / 3.0
+}
+
+/// Enclosed volume of the members, whichever way their normals point.
+fn volume(s: &Sheets, m: &[usize]) -> Real {
+    signed_volume(s, m).abs()
 }
 
 /// +1 when the members' normals point away from their centroid on the
 /// whole (out of a closed film), −1 otherwise.
 fn outward(s: &Sheets, m: &[usize]) -> Real {
-    let c: Vec3 = m.iter().map(|&i| s.x[i]).sum::<Vec3>() / m.len() as Real;
-    let o: Real = m
-        .iter()
-        .map(|&i| s.area[i] * (s.x[i] - c).dot(&s.normals[i]))
-        .sum();
-    if o < 0.0 {
+    if signed_volume(s, m) < 0.0 {
         -1.0
     } else {
         1.0
