@@ -588,6 +588,7 @@ impl Sim {
                     let r = rec.air.get_or_insert_with(Default::default);
                     r.new_bubbles += a.new_bubbles as u32;
                     r.burst += a.burst as u32;
+                    r.merged += a.merged as u32;
                     r.bag_pressure_max = r.bag_pressure_max.max(a.bag_pressure);
                     r.bag_pressure_min = r.bag_pressure_min.min(a.bag_pressure);
                     r.mouth_radius = a.mouth_radius;

@@ -114,6 +114,9 @@ pub struct AirRecord {
     /// Bubbles lost during the frame (burst, or joined to the ring's film).
     #[serde(default)]
     pub burst: u32,
+    /// Bubbles that met another bubble during the frame and merged with it.
+    #[serde(default)]
+    pub merged: u32,
     /// Largest excess pressure in the bag over the frame's substeps (Pa).
     pub bag_pressure_max: Real,
     /// Smallest excess pressure in the bag (Pa; negative while it inflates).

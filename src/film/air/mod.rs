@@ -42,7 +42,9 @@
 //!   V̇(u) + β (V − V_0)/Δt + c p = 0 (β = 0.2 draws a volume drift back over
 //!   a few steps). A bubble is followed from step to step by a sample of its
 //!   particles' ids; one that lost a third of its volume or joined the
-//!   ring's film has burst and lets its air go.
+//!   ring's film has burst and lets its air go. Bubbles whose films join
+//!   merge: the joined film holds the sum of their rest volumes (the
+//!   burst test compares its volume with that sum).
 //!
 //! Each pressure is a Lagrange multiplier on the sheet velocities after the
 //! tension solve, implicit with the tension ([`stage`]): a second tension
@@ -140,6 +142,9 @@ pub struct AirInfo {
     /// Bubbles lost in this step: burst (a third of their volume gone) or
     /// joined to the ring's film.
     pub burst: usize,
+    /// Bubbles that met another bubble in this step and now share its air
+    /// (one bubble holds the sum of their rest volumes).
+    pub merged: usize,
     /// Largest relative volume error of a bubble, |V − V_0| / V_0.
     pub bubble_volume_error: Real,
 }

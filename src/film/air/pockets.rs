@@ -145,34 +145,33 @@ pub fn plan(
     let nc = members.len();
 
     // follow the bubbles: the component holding most of each one's ids
-    let index: HashMap<u64, usize> = (0..n).map(|i| (s.id[i], i)).collect();
     let mut owner: Vec<Option<usize>> = vec![None; nc];
     let mut kept: Vec<Bubble> = Vec::new();
-    for b in state.bubbles.drain(..) {
-        let mut votes: HashMap<u32, usize> = HashMap::new();
-        for id in &b.ids {
-            if let Some(&i) = index.get(id) {
-                *votes.entry(label[i]).or_default() += 1;
-            }
+    let bubbles = std::mem::take(&mut state.bubbles);
+    let found = follow(s, label, &bubbles);
+    // the bubbles in one component met: their airs add up before the
+    // intact test, so two touching bubbles merge instead of bursting
+    let mut v0 = vec![0.0; nc];
+    for (b, c) in bubbles.iter().zip(&found) {
+        if let Some(c) = *c {
+            v0[c] += b.v0;
         }
-        let best = votes
-            .into_iter()
-            .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
-            .map(|(c, _)| c as usize);
+    }
+    for (b, c) in bubbles.into_iter().zip(found) {
         // a bubble that lost a third of its volume or more has burst (a
         // hole, or torn by a neighbour): its air is gone
         let intact = |c: usize| {
             let v = volume(s, &members[c]);
-            (v - b.v0).abs() < prm.burst * b.v0
+            (v - v0[c]).abs() < prm.burst * v0[c]
         };
-        match best {
+        match c {
             Some(c) if !on_ring[c] && members[c].len() >= prm.min_bubble && intact(c) => {
                 match owner[c] {
                     // two bubbles met: one bubble with both airs
-                    Some(k) => kept[k].v0 += b.v0,
+                    Some(_) => plan.info.merged += 1,
                     None => {
                         owner[c] = Some(kept.len());
-                        kept.push(b);
+                        kept.push(Bubble { v0: v0[c], ..b });
                     }
                 }
             }
@@ -261,6 +260,30 @@ pub fn plan(
         });
     }
     plan
+}
+
+/// The component holding most of each bubble's ids (ties to the lower
+/// label), or `None` when none of its ids is left.
+fn follow(s: &Sheets, label: &[u32], bubbles: &[Bubble]) -> Vec<Option<usize>> {
+    if bubbles.is_empty() {
+        return Vec::new();
+    }
+    let index: HashMap<u64, usize> = s.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
+    bubbles
+        .iter()
+        .map(|b| {
+            let mut votes: HashMap<u32, usize> = HashMap::new();
+            for id in &b.ids {
+                if let Some(&i) = index.get(id) {
+                    *votes.entry(label[i]).or_default() += 1;
+                }
+            }
+            votes
+                .into_iter()
+                .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
+                .map(|(c, _)| c as usize)
+        })
+        .collect()
 }
 
 /// ⅓ Σ A (x − c)·n over the members, c their centroid: the enclosed volume

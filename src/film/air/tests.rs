@@ -151,6 +151,47 @@ fn a_free_closed_film_becomes_a_bubble_that_holds_its_volume() {
 }
 
 #[test]
+fn two_bubbles_that_meet_merge_and_keep_both_airs() {
+    let (r, h) = (0.01, 0.0025);
+    let (x, nrm, _) = sphere(2000, r, Vec3::zeros());
+    let n = x.len();
+    let film = Film::new(
+        x,
+        nrm,
+        vec![false; n],
+        4.0 * PI * r * r / n as Real,
+        1e-9,
+        h,
+    );
+    let s = film.sheets();
+    let prm = params(h);
+    let sv = survey(&s, |i| &film.nb[i], &prm);
+    // two bubbles of half the sphere's volume each, whose films are now
+    // one: the ids of one are the even particles, of the other the odd
+    let v = 4.0 / 3.0 * PI * r.powi(3);
+    let half = |k: u64| Bubble {
+        v0: 0.5 * v,
+        ids: (0..32).map(|j| s.id[(2 * j + k) as usize * 7]).collect(),
+        pressure: 0.0,
+    };
+    let mut st = AirState {
+        bubbles: vec![half(0), half(1)],
+    };
+    let u = vec![Vec3::zeros(); n];
+    let p = plan(&s, &sv, &u, &prm, &mut st, 1e-4, false);
+    assert_eq!((p.info.burst, p.info.merged, st.bubbles.len()), (0, 1, 1));
+    assert!((st.bubbles[0].v0 / v - 1.0).abs() < 1e-12);
+    assert_eq!(p.pockets.len(), 1);
+    // the merged film's volume is the sum of both airs to the sampling's
+    // accuracy
+    assert!(
+        p.info.bubble_volume_error < 0.01,
+        "{}",
+        p.info.bubble_volume_error
+    );
+}
+
+#[test]
 fn an_open_cap_or_a_crumpled_sheet_is_no_bubble() {
     let (r, h) = (0.01, 0.0025);
     let (x, nrm, area) = sphere(2000, r, Vec3::zeros());
