@@ -178,20 +178,27 @@ fn gap_lines_fill_a_sheet_stretched_in_one_direction() {
     assert!((momentum(&on) - j0).norm() < 1e-12 * j0.norm());
 }
 
-#[test]
-fn a_film_particle_crowding_a_ring_goes_to_the_film_not_into_the_ring() {
-    let h = 0.1;
+/// Ten fixed (ring) sheet particles of mass 2, 0.3 h apart along x,
+/// moving at `v`.
+fn ring(h: Real, v: Vec3) -> Particles {
     let mut p = Particles::new();
     for i in 0..10 {
         let k = p.push(
             Vec3::new(i as Real * 0.3 * h, 0.0, 0.0),
-            Vec3::zeros(),
+            v,
             2.0,
             0.01,
             Codim::Sheet,
         );
         p.fixed[k] = true;
     }
+    p
+}
+
+#[test]
+fn a_film_particle_crowding_a_ring_goes_to_the_film_not_into_the_ring() {
+    let h = 0.1;
+    let mut p = ring(h, Vec3::zeros());
     // a sheet particle 0.05 h from ring particle 1, its neighbour 0.5 h away
     p.push(
         Vec3::new(0.3 * h, 0.05 * h, 0.0),
@@ -225,18 +232,8 @@ fn a_film_particle_crowding_a_ring_goes_to_the_film_not_into_the_ring() {
 #[test]
 fn rim_particles_reaching_a_ring_merge_into_it_and_the_ring_keeps_its_motion() {
     let h = 0.1;
-    let mut p = Particles::new();
     let ring_v = Vec3::new(0.0, 0.0, 0.05);
-    for i in 0..10 {
-        let k = p.push(
-            Vec3::new(i as Real * 0.3 * h, 0.0, 0.0),
-            ring_v,
-            2.0,
-            0.01,
-            Codim::Sheet,
-        );
-        p.fixed[k] = true;
-    }
+    let mut p = ring(h, ring_v);
     // a rim particle 0.1 h from the ring, one 0.5 h away
     p.push(
         Vec3::new(0.3 * h, 0.1 * h, 0.0),

@@ -63,6 +63,26 @@ fn run_scaled(scene: &Path, out: &Path, frames: u32, resume: bool, scale: Option
     sim
 }
 
+/// Checks that bubble `b`'s air is within 5 % of the Laplace pressure 4σ/R
+/// of a soap bubble with two faces (σ = 0.01 N/m, R the radius of a sphere
+/// of volume V_0); returns R.
+fn at_laplace(b: &codimfx::film::air::Bubble) -> f64 {
+    let r_eq = (3.0 * b.v0 / (4.0 * std::f64::consts::PI)).cbrt();
+    let laplace = 4.0 * 0.01 / r_eq;
+    eprintln!(
+        "bubble: V0 = {:.3} cm³, R = {:.2} mm, p = {:.3} Pa against 4σ/R = {laplace:.3} Pa",
+        b.v0 * 1e6,
+        r_eq * 1e3,
+        b.pressure
+    );
+    assert!(
+        (b.pressure / laplace - 1.0).abs() < 0.05,
+        "{} vs {laplace}",
+        b.pressure
+    );
+    r_eq
+}
+
 #[test]
 fn a_gust_blows_a_bubble_that_keeps_its_air_at_the_laplace_pressure() {
     let tmp = tempfile::tempdir().unwrap();
@@ -90,23 +110,9 @@ fn a_gust_blows_a_bubble_that_keeps_its_air_at_the_laplace_pressure() {
     assert_eq!(closed, 1);
     let last = air.last().unwrap();
     assert_eq!(last.bubbles.len(), 1);
-    let b = &last.bubbles[0];
     // its air keeps its volume and holds the film at the Laplace pressure
-    // of a soap bubble with two faces, 4σ/R
-    let r_eq = (3.0 * b.v0 / (4.0 * std::f64::consts::PI)).cbrt();
-    let laplace = 4.0 * 0.01 / r_eq;
-    eprintln!(
-        "bubble: V0 = {:.3} cm³, R = {:.2} mm, p = {:.3} Pa against 4σ/R = {laplace:.3} Pa",
-        b.v0 * 1e6,
-        r_eq * 1e3,
-        b.pressure
-    );
+    let r_eq = at_laplace(&last.bubbles[0]);
     assert!(r_eq > 0.008 && r_eq < 0.02, "R = {r_eq}");
-    assert!(
-        (b.pressure / laplace - 1.0).abs() < 0.05,
-        "{} vs {laplace}",
-        b.pressure
-    );
     assert!(last.bubble_volume_error < 0.01, "{last:?}");
     // the bubble is round and holds V0; the ring's film is back near its plane
     let p = ply::read(&sim.dir.join("particles.0005.ply"))
@@ -188,15 +194,6 @@ fn the_preset_blows_its_first_bubble_and_the_ring_keeps_its_mass() {
     let a1 = m.frames[1].air.clone().unwrap();
     let a2 = m.frames[2].air.clone().unwrap();
     assert_eq!((a1.new_bubbles, a2.new_bubbles, a2.burst), (1, 0, 0));
-    let b = &a2.bubbles[0];
-    let r_eq = (3.0 * b.v0 / (4.0 * std::f64::consts::PI)).cbrt();
-    let laplace = 4.0 * 0.01 / r_eq;
-    eprintln!(
-        "bubble: V0 = {:.3} cm³, R = {:.2} mm, p = {:.3} Pa against {laplace:.3} Pa",
-        b.v0 * 1e6,
-        r_eq * 1e3,
-        b.pressure
-    );
-    assert!((b.pressure / laplace - 1.0).abs() < 0.05);
+    at_laplace(&a2.bubbles[0]);
     assert!(a2.bubble_volume_error < 0.01, "{a2:?}");
 }
