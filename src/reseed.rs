@@ -38,12 +38,9 @@
 //! `remove_distance·h` (paper: between 0.1 h and 0.2 h); the deleted
 //! particle's mass and momentum are merged into the survivor.
 //!
-//! Fixed (boundary) particles are never removed, never donate, never seed
-//! and never take a removed particle's mass (a film particle crowding a
-//! ring goes to its nearest moving neighbour instead, so the ring is no
-//! sink for the film's mass; only a rim that reaches it merges into it).
-//! Seen from a film particle, the cells beyond a fixed neighbour count as
-//! filled, so the gap that opens between a film and a moving ring is
+//! Fixed (boundary) particles are never removed, never donate and never
+//! seed; seen from a film particle, the cells beyond a fixed neighbour count
+//! as filled, so the gap that opens between a film and a moving ring is
 //! refilled. All changes are applied at one point (the end of [`reseed`]).
 
 use crate::math::{Mat3, Real, Vec3};

@@ -60,15 +60,6 @@ fn of_kind(parts: &Particles, kind: Codim) -> Option<(Vec<usize>, Vec<Vec3>)> {
 
 /// Removes particles of codimension `kind` closer than the threshold to a
 /// surviving one, merging mass and momentum. Returns the number removed.
-///
-/// A film particle too close to a fixed (ring) particle is removed too, but
-/// its mass and momentum go to its nearest other moving neighbour within h,
-/// not to the ring: a ring never gives mass back (it never donates), so
-/// every insertion beside it followed by a removal into it pumped film mass
-/// into the boundary. On the blowing bubble the ring's particles gained 15 %
-/// of the film's mass in 0.6 s, half of it while the film hung still, and the
-/// thinned film tore in the third gust (docs/decisions.md). Without a moving
-/// neighbour within h the particle stays.
 pub(super) fn remove_close(parts: &mut Particles, kind: Codim, prm: &ReseedParams) -> u64 {
     let Some((idx, pts)) = of_kind(parts, kind) else {
         return 0;
@@ -76,59 +67,26 @@ pub(super) fn remove_close(parts: &mut Particles, kind: Codim, prm: &ReseedParam
     let r = prm.remove_distance * prm.h;
     let grid = CellGrid::build(&pts, r);
     let mut alive = vec![true; parts.len()];
-    // moving particles (as indices into idx) found too close to a ring
-    let mut at_ring: Vec<usize> = Vec::new();
     let mut n = 0;
     for (a, &p) in idx.iter().enumerate() {
         if !alive[p] {
             continue;
         }
-        let mut best: Option<(Real, usize, usize)> = None;
+        let mut best: Option<(Real, usize)> = None;
         grid.for_each_within(&pts, &pts[a], r, |b, d2| {
             let q = idx[b];
             if q != p
                 && alive[q]
                 && !parts.fixed[q]
-                && best.is_none_or(|(bd, bq, _)| d2 < bd || (d2 == bd && q < bq))
+                && best.is_none_or(|(bd, bq)| d2 < bd || (d2 == bd && q < bq))
             {
-                best = Some((d2, q, b));
+                best = Some((d2, q));
             }
         });
-        match best {
-            Some((_, _, b)) if parts.fixed[p] => at_ring.push(b),
-            Some((_, q, _)) => {
-                merge_into(parts, p, q);
-                alive[q] = false;
-                n += 1;
-            }
-            None => {}
-        }
-    }
-    if !at_ring.is_empty() {
-        // the film particles crowding a ring go to their nearest moving
-        // neighbour within h (in the order met; both must still be alive)
-        let wide = CellGrid::build(&pts, prm.h);
-        for b in at_ring {
-            let q = idx[b];
-            if !alive[q] {
-                continue;
-            }
-            let mut best: Option<(Real, usize)> = None;
-            wide.for_each_within(&pts, &pts[b], prm.h, |c, d2| {
-                let k = idx[c];
-                if k != q
-                    && alive[k]
-                    && !parts.fixed[k]
-                    && best.is_none_or(|(bd, bk)| d2 < bd || (d2 == bd && k < bk))
-                {
-                    best = Some((d2, k));
-                }
-            });
-            if let Some((_, k)) = best {
-                merge_into(parts, k, q);
-                alive[q] = false;
-                n += 1;
-            }
+        if let Some((_, q)) = best {
+            merge_into(parts, p, q);
+            alive[q] = false;
+            n += 1;
         }
     }
     parts.retain(&alive);

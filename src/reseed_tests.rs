@@ -196,40 +196,6 @@ fn ring(h: Real, v: Vec3) -> Particles {
 }
 
 #[test]
-fn a_film_particle_crowding_a_ring_goes_to_the_film_not_into_the_ring() {
-    let h = 0.1;
-    let mut p = ring(h, Vec3::zeros());
-    // a sheet particle 0.05 h from ring particle 1, its neighbour 0.5 h away
-    p.push(
-        Vec3::new(0.3 * h, 0.05 * h, 0.0),
-        Vec3::new(0.0, 1.0, 0.0),
-        1.0,
-        0.01,
-        Codim::Sheet,
-    );
-    p.push(
-        Vec3::new(0.3 * h, 0.5 * h, 0.0),
-        Vec3::new(0.0, 4.0, 0.0),
-        3.0,
-        0.01,
-        Codim::Sheet,
-    );
-    let (m0, j0) = (p.total_mass(), momentum(&p));
-    let c = reseed_identity(&mut p, &FlatShape, &ReseedParams::paper(h));
-    assert_eq!(c.sheet_removed, 1, "{c:?}");
-    assert_eq!(p.len(), 11);
-    // the ring keeps its mass; the film keeps its mass and momentum
-    for i in 0..10 {
-        assert_eq!(p.mass[i], 2.0);
-        assert!(p.fixed[i]);
-    }
-    assert!((p.mass[10] - 4.0).abs() < 1e-12);
-    assert!((p.v[10] - Vec3::new(0.0, 13.0 / 4.0, 0.0)).norm() < 1e-12);
-    assert!((p.total_mass() - m0).abs() < 1e-12 * m0);
-    assert!((momentum(&p) - j0).norm() < 1e-12 * j0.norm());
-}
-
-#[test]
 fn rim_particles_reaching_a_ring_merge_into_it_and_the_ring_keeps_its_motion() {
     let h = 0.1;
     let ring_v = Vec3::new(0.0, 0.0, 0.05);
