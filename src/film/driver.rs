@@ -28,6 +28,7 @@ pub fn params_from_scene(s: &Scene) -> FilmParams {
     let a = s.acceleration();
     prm.gravity = Vec3::new(a[0], a[1], a[2]);
     prm.damping = f.damping;
+    prm.marangoni = f.marangoni;
     prm.wind = f.wind.as_ref().map(|w| Wind {
         velocity: Vec3::from(w.velocity),
         air_density: w.air_density,

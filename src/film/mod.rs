@@ -13,6 +13,7 @@ pub mod catenoid;
 pub mod deformation;
 pub mod driver;
 pub mod step;
+pub mod weight;
 
 use crate::gas::GasPocket;
 use crate::linsolve::{BicgstabParams, SolveError, SolveInfo};
@@ -124,6 +125,10 @@ pub struct FilmParams {
     pub viscosity: Real,
     /// Gravity (m/s²).
     pub gravity: Vec3,
+    /// A film held by a ring carries the part of its weight along the film
+    /// to the ring (surfactant, [`weight`]): only gravity's normal part acts
+    /// on its sheet particles.
+    pub marangoni: bool,
     /// Free films have two faces: their tension area is doubled.
     pub free_film: bool,
     /// Linear air drag on film particles (1/s): f = −c m u. 0 = none.
@@ -180,6 +185,7 @@ impl FilmParams {
             density: 1000.0,
             viscosity: 0.0,
             gravity: Vec3::new(0.0, -9.81, 0.0),
+            marangoni: false,
             free_film: true,
             damping: 0.0,
             wind: None,

@@ -33,7 +33,7 @@ pub use super::advance::{advance_by, film_speed, motion_speed, step_with_retry};
 use super::air::{
     stage as air_stage, survey as air_survey, trapped_jet, Sheets, Survey as AirSurvey,
 };
-use super::{FilmError, FilmParams, FilmState, FilmStepInfo};
+use super::{weight, FilmError, FilmParams, FilmState, FilmStepInfo};
 use crate::coupling::surface::{particle_terms, SurfaceParams};
 use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_drag};
 use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
@@ -389,6 +389,12 @@ pub fn step(
             film.radius[i] = r;
         }
         f[i] += prm.gravity * film.mass[i] - film.v[i] * (prm.damping * film.mass[i]);
+    }
+    if prm.marangoni && prm.gravity != Vec3::zeros() {
+        let held = weight::held(n_sheet, &film.fixed, |i| nb.lists.of(i));
+        weight::carry_to_ring(&mut f, &film.mass, &film.fixed, &held, prm.gravity, |i| {
+            frames[i].axis(2)
+        });
     }
     // enclosed gas and wind act along the sheet normals
     let mut drag: Vec<Real> = Vec::new();

@@ -165,6 +165,12 @@ pub struct FilmSettings {
     /// makes (`film::air`): needs `wind` and a `disk` film.
     #[serde(default)]
     pub bag_air: bool,
+    /// A soap film hung from a ring carries the part of its weight along the
+    /// film to the ring (Gibbs–Marangoni elasticity, `film::weight`): its
+    /// sheet particles feel only gravity's normal part, and it does not
+    /// drain into the ring. Off: the paper's liquid sheet.
+    #[serde(default)]
+    pub marangoni: bool,
     /// MLS fit order of the tension operator (2–4; default 3).
     #[serde(default = "default_order")]
     pub order: usize,
@@ -231,6 +237,7 @@ impl Default for FilmSettings {
             gas: false,
             wind: None,
             bag_air: false,
+            marangoni: false,
             order: default_order(),
             transitions: true,
             reseed: true,
