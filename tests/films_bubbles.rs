@@ -164,7 +164,8 @@ fn a_gust_blows_a_bubble_that_keeps_its_air_at_the_laplace_pressure() {
 fn the_preset_blows_its_first_bubble_at_the_laplace_pressure() {
     // presets/blowing_bubble.yaml at --scale 2 (dx = 2.4 mm, 1,887
     // particles), frames 1–2 (67 ms): the first gust's bubble closes in
-    // frame 1 and keeps its air; measured 4.001 Pa against 4σ/R = 3.958 Pa.
+    // frame 1 and keeps its air; measured 4.007 Pa against 4σ/R = 3.965 Pa
+    // (V₀ = 4.300 cm³; with the preset's `film.marangoni`, session 28).
     let tmp = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/blowing_bubble.yaml");
     let sim = run_scaled(&scene, tmp.path(), 2, false, Some(2.0));

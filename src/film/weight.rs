@@ -10,12 +10,12 @@
 //! ring's particles absorbed 15 % of the film's mass by t = 0.6 s
 //! (docs/decisions.md, "The ring soaks up the film's mass"). A soap film does
 //! not drain like that: its surfactant makes the tension vary along the film
-//! (Gibbs–Marangoni elasticity) and the gradient holds the film's weight,
-//! 2 dσ/dz = ρ g τ for a vertical film of thickness τ (Isenberg, *The
-//! Science of Soap Films and Soap Bubbles*, §2.7). For τ = 1 µm that is a
-//! difference of 2·10⁻⁴ N/m across the blowing bubble's 38 mm ring, 2 % of
-//! σ = 0.01 N/m, so the tension stays uniform to that accuracy and only the
-//! stress it adds along the film matters.
+//! (Gibbs–Marangoni elasticity) and the gradient holds the film's weight:
+//! on a vertical film of thickness τ the two faces' tension difference
+//! across a height dz carries the slice's weight, 2 dσ/dz = ρ g τ. For
+//! τ = 1 µm that is a difference of 2·10⁻⁴ N/m across the blowing bubble's
+//! 38 mm ring, 2 % of σ = 0.01 N/m, so the tension stays uniform to that
+//! accuracy and only the stress it adds along the film matters.
 //!
 //! So with `film.marangoni` a sheet particle connected to a fixed (ring)
 //! particle through sheet neighbours within h feels only the normal part
