@@ -558,7 +558,7 @@ fn a_soap_film_hung_from_a_ring_carries_its_weight_and_does_not_drain() {
                     "  wind:\n    velocity: [0, 1.5, 0]  # m/s\n    drag: 1.0\n    air_density: 1.2\n",
                     "",
                 ),
-                ("max_speed: 5.0", &format!("max_speed: 5.0\n  marangoni: {marangoni}")),
+                ("marangoni: true ", &format!("marangoni: {marangoni} ")),
             ],
         );
         let sim = run(&scene, &dir, 6, false);
