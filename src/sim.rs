@@ -18,7 +18,7 @@
 
 use crate::emitter::Jet;
 use crate::film::driver as film_driver;
-use crate::film::step::motion_speed;
+use crate::film::step::{drift_motion_speed, motion_speed};
 use crate::grid::MacGrid;
 use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed, SubstepRecord};
 use crate::io::ply::{self, frame_name, PlyError};
@@ -473,19 +473,33 @@ impl Sim {
             let (dt, last) = if self.params.film.is_some() {
                 // sheets, filaments and droplets only: motion per substep
                 // at most `film.cfl` particle spacings (droplets
-                // `film.point_cfl`)
+                // `film.point_cfl`; a film's drift with its neighbours
+                // `film.drift_cfl`)
                 let film = &self.scene.film;
-                film_driver::substep(
-                    self.scene.time.max_dt,
-                    film.cfl,
-                    film_spacing,
-                    motion_speed(
+                let point_cfl = film.point_cfl.unwrap_or(film.cfl);
+                // not while a jet blows: the film it blows into a bag
+                // then moves as a whole at up to the jet's speed, under
+                // the explicit stagnation pressure of the air trapped in
+                // the bag, and longer steps burst it (docs/decisions.md,
+                // "Motion limit and drift")
+                let gust = self
+                    .params
+                    .film
+                    .as_ref()
+                    .and_then(|f| f.wind.as_ref())
+                    .is_some_and(|w| w.jet_blowing(self.time));
+                let speed = match film.drift_cfl {
+                    Some(drift) if !gust => drift_motion_speed(
                         &self.state.particles,
+                        dx,
+                        film_spacing,
                         film.cfl,
-                        film.point_cfl.unwrap_or(film.cfl),
+                        point_cfl,
+                        drift,
                     ),
-                    rem,
-                )
+                    _ => motion_speed(&self.state.particles, film.cfl, point_cfl),
+                };
+                film_driver::substep(self.scene.time.max_dt, film.cfl, film_spacing, speed, rem)
             } else {
                 let mut dt = cfl_dt(
                     &self.state.particles,

@@ -266,6 +266,9 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
     assert_eq!(s.film.point_cfl, None);
     let e = err(&format!("{GOOD}film:\n  point_cfl: -1\n"));
     check(&e, "film.point_cfl", 24, "(0, 1000]");
+    assert_eq!(s.film.drift_cfl, None);
+    let e = err(&format!("{GOOD}film:\n  cfl: 0.5\n  drift_cfl: 0.25\n"));
+    check(&e, "film.drift_cfl", 25, "[film.cfl = 0.5, 10]");
     let e = err(&format!("{GOOD}film:\n  implicit: half\n"));
     assert!(e.to_string().contains("unknown variant `half`"), "{e}");
     assert_eq!(e.path(), "film.implicit", "{e}");

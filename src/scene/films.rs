@@ -191,6 +191,15 @@ pub struct FilmSettings {
     /// and points").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub point_cfl: Option<f64>,
+    /// Largest motion per substep, in particle spacings, of a sheet or
+    /// filament particle that moves *with* its neighbours (within h); its
+    /// speed relative to them stays limited by `cfl`. Absent: the absolute
+    /// speed is limited by `cfl` (every scene before session 29). A bubble
+    /// that drifts away whole needs no short step for its drift. Not
+    /// applied while a jet (`film.wind.radius`) blows (docs/decisions.md,
+    /// "Motion limit and drift").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drift_cfl: Option<f64>,
     /// Speed limit (m/s) applied as a counted fallback; 0 = none.
     #[serde(default)]
     pub max_speed: f64,
@@ -243,6 +252,7 @@ impl Default for FilmSettings {
             reseed: true,
             cfl: default_film_cfl(),
             point_cfl: None,
+            drift_cfl: None,
             max_speed: 0.0,
             solver_tolerance: default_film_tol(),
             solver_max_iterations: default_film_iters(),
@@ -399,6 +409,14 @@ pub fn validate(s: &Scene) -> Check {
             return fail(
                 "film.point_cfl",
                 format!("must be in (0, 1000] spacings, got {c}"),
+            );
+        }
+    }
+    if let Some(c) = f.drift_cfl {
+        if !(c.is_finite() && c >= f.cfl && c <= 10.0) {
+            return fail(
+                "film.drift_cfl",
+                format!("must be in [film.cfl = {}, 10] spacings, got {c}", f.cfl),
             );
         }
     }
