@@ -478,10 +478,9 @@ impl Sim {
                 let film = &self.scene.film;
                 let point_cfl = film.point_cfl.unwrap_or(film.cfl);
                 // not while a jet blows: the film it blows into a bag
-                // then moves as a whole at up to the jet's speed, under
-                // the explicit stagnation pressure of the air trapped in
-                // the bag, and longer steps burst it (docs/decisions.md,
-                // "Motion limit and drift")
+                // then moves as a whole at up to the jet's speed, and the
+                // longer steps burst it (docs/decisions.md, "Motion limit
+                // and drift")
                 let gust = self
                     .params
                     .film
