@@ -23,6 +23,7 @@ pub mod validate;
 pub use math::{Real, Vec3};
 pub use particles::{Codim, Particles};
 pub mod advect;
+mod frame_record;
 pub mod grid;
 pub mod io;
 pub mod preview;

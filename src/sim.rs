@@ -18,13 +18,13 @@
 
 use crate::emitter::Jet;
 use crate::film::driver as film_driver;
-use crate::film::step::{drift_motion_speed, motion_speed};
+use crate::frame_record::{base_record, report_substep};
 use crate::grid::MacGrid;
-use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, Speed, SubstepRecord};
+use crate::io::manifest::{sha256_hex, FrameRecord, Manifest, ManifestError, SubstepRecord};
 use crate::io::ply::{self, frame_name, PlyError};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
-use crate::particles::{spatial_order, Codim, Particles};
+use crate::particles::spatial_order;
 use crate::scene::{self, sample_bodies, sample_films, Scene, SceneError, Transfer};
 use crate::solids::SolidSet;
 use crate::step::{cfl_dt, step, SimState, StageTimes, StepError, StepParams};
@@ -128,88 +128,10 @@ pub struct Sim {
     pub verbose: bool,
 }
 
-/// One line per substep on stderr (`codimfx sim -v`): time, Δt, coupled or
-/// pressure solve, particle count, wall time into the frame and the fastest
-/// particle; and why the first form of eq. (24) gave up, when it did.
-fn report_substep(
-    frame: u32,
-    substep: u32,
-    t: Real,
-    dt: Real,
-    info: &crate::step::SubstepInfo,
-    p: &Particles,
-    wall: &Instant,
-) {
-    let s = &info.pressure.solve;
-    let fast = (0..p.len()).max_by(|&a, &b| p.v[a].norm().total_cmp(&p.v[b].norm()));
-    let fastest = fast.map_or(String::new(), |i| {
-        let x = p.x[i];
-        format!(
-            "; fastest: {:?} id {} at {:.2} m/s, ({:.4}, {:.4}, {:.4}) m, {:.2e} kg",
-            p.codim[i],
-            p.id[i],
-            p.v[i].norm(),
-            x.x,
-            x.y,
-            x.z,
-            p.mass[i]
-        )
-    });
-    eprintln!(
-        "frame {frame} substep {substep}: t = {t:.6} s, Δt = {dt:.3e} s, {} iterations, residual {:.1e}, {} particles, {:.1} s into the frame{fastest}",
-        s.iterations,
-        s.rel_residual,
-        p.len(),
-        wall.elapsed().as_secs_f64()
-    );
-    if let Some(e) = info
-        .coupling
-        .as_ref()
-        .and_then(|c| c.first_failure.as_ref())
-    {
-        eprintln!("  the other form took over after: {e}");
-    }
-}
-
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SimError + '_ {
     move |source| SimError::Io {
         path: path.to_path_buf(),
         source,
-    }
-}
-
-fn speed(p: &Particles) -> Speed {
-    if p.is_empty() {
-        return Speed::default();
-    }
-    let (mut mn, mut mx, mut sum) = (Real::INFINITY, 0.0 as Real, 0.0);
-    for v in &p.v {
-        let s = v.norm();
-        mn = mn.min(s);
-        mx = mx.max(s);
-        sum += s;
-    }
-    Speed {
-        min: mn,
-        max: mx,
-        mean: sum / p.len() as Real,
-    }
-}
-
-fn base_record(frame: u32, time: Real, p: &Particles) -> FrameRecord {
-    let c = p.counts();
-    FrameRecord {
-        frame,
-        time,
-        next_id: p.next_id,
-        counts: Codim::ALL
-            .iter()
-            .map(|k| (k.name().to_string(), c[*k as usize]))
-            .collect(),
-        speed: speed(p),
-        total_mass: p.total_mass(),
-        stage_s: StageTimes::default().0,
-        ..Default::default()
     }
 }
 
@@ -458,7 +380,6 @@ impl Sim {
         let (mut dt_min, mut dt_max) = (Real::INFINITY, 0.0 as Real);
         let mut substeps = 0;
         let dx = self.scene.domain.dx;
-        let film_spacing = film_driver::spacing(&self.scene);
         // each frame's first coupled solve starts cold: what a resumed run sees
         self.state.warm = None;
         // and its particles in space order (so does a resumed run's)
@@ -470,35 +391,14 @@ impl Sim {
         let mut failures = 0u32;
         while self.time < t_end {
             let rem = t_end - self.time;
-            let (dt, last) = if self.params.film.is_some() {
-                // sheets, filaments and droplets only: motion per substep
-                // at most `film.cfl` particle spacings (droplets
-                // `film.point_cfl`; a film's drift with its neighbours
-                // `film.drift_cfl`)
-                let film = &self.scene.film;
-                let point_cfl = film.point_cfl.unwrap_or(film.cfl);
-                // not while a jet blows: the film it blows into a bag
-                // then moves as a whole at up to the jet's speed, and the
-                // longer steps burst it (docs/decisions.md, "Motion limit
-                // and drift")
-                let gust = self
-                    .params
-                    .film
-                    .as_ref()
-                    .and_then(|f| f.wind.as_ref())
-                    .is_some_and(|w| w.jet_blowing(self.time));
-                let speed = match film.drift_cfl {
-                    Some(drift) if !gust => drift_motion_speed(
-                        &self.state.particles,
-                        dx,
-                        film_spacing,
-                        film.cfl,
-                        point_cfl,
-                        drift,
-                    ),
-                    _ => motion_speed(&self.state.particles, film.cfl, point_cfl),
-                };
-                film_driver::substep(self.scene.time.max_dt, film.cfl, film_spacing, speed, rem)
+            let (dt, last) = if let Some(fp) = &self.params.film {
+                film_driver::film_substep(
+                    &self.scene,
+                    fp.wind.as_ref(),
+                    &self.state.particles,
+                    self.time,
+                    rem,
+                )
             } else {
                 let mut dt = cfl_dt(
                     &self.state.particles,

@@ -1,9 +1,10 @@
 //! Film-only scenes (no liquid, no grid): the film step's parameters and
 //! initial state from the scene, the substep length (motion per substep
-//! limited to `film.cfl` particle spacings), droplets stopped at the domain
+//! limited to `film.cfl` particle spacings, [`film_substep`]), droplets stopped at the domain
 //! box, and the cache's frame vectors. The frame loop is [`crate::sim`]'s and
 //! the substep [`crate::step::step`]'s, as for every scene.
 
+use super::advance::{drift_motion_speed, motion_speed};
 use super::air::AirParams;
 use super::{FilmParams, FilmState, Gust, Wind};
 use crate::gas::GasPocket;
@@ -156,6 +157,34 @@ pub fn substep(max_dt: Real, cfl: Real, spacing: Real, vmax: Real, rem: Real) ->
         dt = dt.min(cfl * spacing / vmax);
     }
     fit_to_frame(dt, rem)
+}
+
+/// The next substep of a film-only scene at time `t` with `rem` seconds of
+/// the frame left, and whether it ends the frame: motion per substep at most
+/// `film.cfl` particle spacings, droplets `film.point_cfl`, and with
+/// `film.drift_cfl` a film's drift with its neighbours that many
+/// ([`super::advance::drift_motion_speed`]). The drift limit is not used
+/// while a jet blows: the film it blows into a bag then moves as a whole at
+/// up to the jet's speed, and the longer steps burst it (docs/decisions.md,
+/// "Motion limit and drift").
+pub fn film_substep(
+    s: &Scene,
+    wind: Option<&Wind>,
+    p: &Particles,
+    t: Real,
+    rem: Real,
+) -> (Real, bool) {
+    let film = &s.film;
+    let spacing = spacing(s);
+    let point_cfl = film.point_cfl.unwrap_or(film.cfl);
+    let jet = wind.is_some_and(|w| w.jet_blowing(t));
+    let speed = match film.drift_cfl {
+        Some(drift) if !jet => {
+            drift_motion_speed(p, s.domain.dx, spacing, film.cfl, point_cfl, drift)
+        }
+        _ => motion_speed(p, film.cfl, point_cfl),
+    };
+    substep(s.time.max_dt, film.cfl, spacing, speed, rem)
 }
 
 /// A substep of at most `dt` with `rem` seconds of the frame left: the rest
