@@ -29,9 +29,7 @@
 //! matrix rows share one index; the store is rebuilt at the end with the
 //! other particles first, in their previous order.
 
-pub use super::advance::{
-    advance_by, drift_motion_speed, film_speed, motion_speed, step_with_retry,
-};
+pub use super::advance::{advance_by, film_speed, motion_speed, step_with_retry};
 use super::air::{
     stage as air_stage, survey as air_survey, trapped_jet, Sheets, Survey as AirSurvey,
 };
