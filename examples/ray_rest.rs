@@ -1,7 +1,8 @@
 //! Resting droplet at R = 4Δx, Δt = 0.01 s, 1 s: largest particle speed
 //! and interior pressure against 2σ/R, for both band velocities.
 //! Arguments (all optional): R/Δx, substeps, level-set radius (× Δx),
-//! `coupling.mass_floor`.
+//! `coupling.mass_floor`. `LAYER=jump` in the environment runs the
+//! surface layer's tension as a ghost-fluid jump (`coupling.layer: jump`).
 use codimfx::coupling::BandVelocity;
 use codimfx::math::Real;
 use codimfx::step::{step, StageTimes};
@@ -12,11 +13,15 @@ fn main() {
     let n: usize = std::env::args().nth(2).map_or(100, |s| s.parse().unwrap());
     let sr: Option<Real> = std::env::args().nth(3).map(|s| s.parse().unwrap());
     let floor: Option<Real> = std::env::args().nth(4).map(|s| s.parse().unwrap());
+    let jump = std::env::var("LAYER").is_ok_and(|v| v == "jump");
     for band in [BandVelocity::Sheet, BandVelocity::Extrapolated] {
         let mut case = DropletCase {
             band,
             ..DropletCase::paper(cells)
         };
+        if jump {
+            case.layer = codimfx::coupling::LayerTension::Jump;
+        }
         if let Some(sr) = sr {
             case.surface_radius = sr;
         }

@@ -417,6 +417,7 @@ impl Sim {
                 if v_jet > 0.0 {
                     dt = dt.min(self.scene.time.cfl * dx / v_jet);
                 }
+                dt = dt.min(crate::coupling::jump::capillary_limit(&self.scene, dx));
                 film_driver::fit_to_frame(dt.min(dt_cap), rem)
             };
             let t1 = if last { t_end } else { self.time + dt };
@@ -530,6 +531,8 @@ impl Sim {
                 residual: s.rel_residual,
                 cells: info.pressure.cells,
                 mass_shift: info.coupling.as_ref().map_or(0.0, |c| c.mass_shift),
+                jump_particles: info.coupling.as_ref().map_or(0, |c| c.jump_particles),
+                jump_faces: info.coupling.as_ref().map_or(0, |c| c.jump_faces),
             });
             if let Some(v) = info.viscosity {
                 for s in v {

@@ -220,6 +220,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             crate::scene::BandSetting::Extrapolated => coupling::BandVelocity::Extrapolated,
         },
         surface_radius: s.solver.surface_radius,
+        layer: s.coupling.layer,
         transitions: s.film.transitions.then(|| TransitionParams::paper(h)),
         reseed: s
             .film

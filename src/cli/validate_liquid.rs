@@ -1,5 +1,6 @@
 //! `codimfx validate slab`: the coupled solver's thick sheet edge against
 //! the momentum balance of Taylor–Culick retraction (2σ per unit length).
+use super::bench::accuracy::LayerArg;
 use anyhow::{Context, Result};
 use clap::Args;
 use codimfx::math::Real;
@@ -17,6 +18,9 @@ pub struct SlabArgs {
     /// Level-set radius of the liquid, relative to Δx (`solver.surface_radius`).
     #[arg(long, default_value_t = 1.0)]
     surface_radius: Real,
+    /// How the surface layer carries its tension (`coupling.layer`).
+    #[arg(long, value_enum, default_value_t = LayerArg::Coupled)]
+    layer: LayerArg,
     /// Substep (s).
     #[arg(long, default_value_t = 0.0025)]
     dt: Real,
@@ -44,6 +48,7 @@ pub fn slab(a: SlabArgs) -> Result<()> {
         cells: a.cells,
         offset: a.offset,
         surface_radius: a.surface_radius,
+        layer: a.layer.into(),
         ..SlabCase::chain()
     };
     let (samples, wall) = retract(&case, a.dt, a.time, a.every).context("running the slab")?;

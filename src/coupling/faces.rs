@@ -211,10 +211,22 @@ fn free_mass(g: &MacGrid, sys: &Poisson, k: &Constraints) -> Real {
 /// `0..x.len()`) and builds J. Deterministic: entries are sorted by face,
 /// then particle.
 pub fn constraints(g: &MacGrid, sys: &Poisson, x: &[Vec3]) -> Constraints {
+    constraints_of(g, sys, x, |_| true)
+}
+
+/// [`constraints`] of the sheet particles i with `keep(i)` only (the others
+/// constrain no face; joint indices are unchanged).
+pub fn constraints_of(
+    g: &MacGrid,
+    sys: &Poisson,
+    x: &[Vec3],
+    keep: impl Fn(usize) -> bool + Sync,
+) -> Constraints {
     // (axis, slot, particle, weight) of every stencil entry
     let mut entries: Vec<(u8, u32, u32, Real)> = x
         .par_iter()
         .enumerate()
+        .filter(|(i, _)| keep(*i))
         .flat_map_iter(|(i, p)| {
             (0..3).flat_map(move |a| {
                 let (idx, w) = g.stencil(a, p);

@@ -10,7 +10,10 @@
 //! - [`system`]: eq. (24) as the paper writes it (`Method::Monolithic`), or
 //!   with λ eliminated exactly (`Method::Schur`), both solved with GMRES
 //!   (default) or the paper's BiCGSTAB ([`Krylov`]), preconditioned by an
-//!   incomplete LU, at the scene's tolerance (paper: 1e-9).
+//!   incomplete LU, at the scene's tolerance (paper: 1e-9);
+//! - [`jump`]: with `coupling.layer: jump`, a volume's surface layer gives
+//!   the grid a ghost-fluid pressure jump σκ instead of tension rows and
+//!   constraint faces (free sheets and filaments keep eq. 24).
 //!
 //! Both methods give the same face velocities, pressures and particle
 //! velocities up to the solver tolerance; the reduced one is smaller (no λ
@@ -22,6 +25,7 @@
 pub mod band;
 pub mod codim;
 pub mod faces;
+pub mod jump;
 pub mod params;
 pub mod release;
 pub mod reseed;
@@ -30,7 +34,8 @@ pub mod system;
 pub mod warm;
 
 use crate::grid::extrapolate::{constrain_solids, extrapolate};
-use crate::grid::projection::{project_liquid, Poisson};
+use crate::grid::pcg::pcg;
+use crate::grid::projection::Poisson;
 use crate::grid::MacGrid;
 use crate::linsolve::{
     bicgstab, gmres, Csr, GmresParams, Ilu0, Operator, Preconditioner, SolveError, TripledIlu,
@@ -41,8 +46,8 @@ use crate::solids::SolidSet;
 use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 pub use band::{band_correction, BAND_PROBE};
 pub use params::{
-    BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Krylov, Method,
-    GMRES_RESTART, MAX_OUTLIER_ROUNDS,
+    BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Krylov, LayerTension,
+    Method, GMRES_RESTART, MAX_OUTLIER_ROUNDS,
 };
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
@@ -70,13 +75,39 @@ pub fn solve(
 ) -> Result<CouplingInfo, CouplingError> {
     let mut info = CouplingInfo::default();
     let t = Instant::now();
-    let surf = surface::build(parts, &prm.surface)?;
+    let mut surf = surface::build(parts, &prm.surface)?;
+    let jump = prm.layer == LayerTension::Jump;
+    // with the jump, a volume's surface layer (where the body is deep enough)
+    // takes no tension row: it is held at its velocity in the particle block
+    // and moves with the grid
+    let spacing = volume_spacing(volume_totals(parts), prm.surface.density);
+    let points = jump.then(|| {
+        let volume: Vec<Vec3> = parts
+            .x
+            .iter()
+            .zip(&parts.codim)
+            .filter(|(_, c)| **c == crate::particles::Codim::Volume)
+            .map(|(x, _)| *x)
+            .collect();
+        let h = prm.surface.mls.h;
+        let s = spacing.unwrap_or(0.0);
+        jump::layer_points(&surf, &volume, h, grid.dx, prm.surface.sigma, s)
+    });
+    if let Some(p) = &points {
+        info.jump_particles = p.iter().filter(|x| x.is_some()).count();
+        for (fixed, p) in surf.fixed.iter_mut().zip(p) {
+            *fixed |= p.is_some();
+        }
+        info.trimmed_cells =
+            jump::trim_level_set(grid, &surf, p, spacing.unwrap_or(0.0), 1.5 * grid.dx);
+    }
     info.operators_s = t.elapsed().as_secs_f64();
     info.particles = surf.len();
     info.counts = surf.counts;
     info.fits = surf.fits;
     let t = Instant::now();
     let sheets = &surf.nb.x[..surf.n_sheet()];
+    let constrains = |i: usize| points.as_ref().is_none_or(|p| p[i].is_none());
     // the grid's system and K, and beside them the particles' order in the
     // coupled system (it needs only the Laplacian's pattern)
     let ((full, constrained, released, shift), order) = {
@@ -87,7 +118,7 @@ pub fn solve(
                 // K after the pre-solve release, with the face masses of
                 // eq. (19) (per face, so releasing more faces later leaves
                 // the others' as they are)
-                let mut constrained = faces::constraints(grid, &full, sheets);
+                let mut constrained = faces::constraints_of(grid, &full, sheets, constrains);
                 constrained.floor = prm.mass_floor;
                 let released = constrained.release_enclosed(grid, &full, sheets);
                 let mut shift_used = None;
@@ -128,6 +159,21 @@ pub fn solve(
         density: prm.surface.density,
         dx: grid.dx,
     };
+    let mut full = full;
+    if let Some(p) = &points {
+        let scale = dt / (sc.density * grid.dx);
+        let air = jump::air_values(
+            grid,
+            &full,
+            &constrained,
+            &surf,
+            p,
+            prm.surface.mls.h,
+            scale,
+        );
+        info.jump_faces = air.len();
+        full.set_air(grid, air);
+    }
     // the velocity jump no substep makes physically (release::outlier_bound)
     let v_ref = grid
         .u
@@ -148,7 +194,7 @@ pub fn solve(
         }
         info.faces = k.len();
         if k.is_empty() {
-            return solve_uncoupled(grid, solids, parts, prm, dt, layers, &surf, info, t);
+            return solve_uncoupled(grid, solids, parts, prm, dt, layers, &surf, &full, info, t);
         }
         let mut vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
         // K v = K (J u + c): in the face rows, v** − c takes the place of v**
@@ -286,15 +332,33 @@ fn solve_uncoupled(
     dt: Real,
     layers: usize,
     surf: &surface::Surface,
+    full: &Poisson,
     mut info: CouplingInfo,
     t: Instant,
 ) -> Result<CouplingInfo, CouplingError> {
-    // no coupling rows: the two blocks are independent
+    // no coupling rows: the two blocks are independent; the pressure is the
+    // liquid's projection (`full`, with the surface layer's jump if any)
     info.assemble_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let p = project_liquid(grid, solids, prm.pressure, layers).map_err(CouplingError::Pressure)?;
-    info.iterations = p.solve.iterations as usize;
-    info.rel_residual = p.solve.rel_residual;
+    let mut q = vec![0.0; full.a.len()];
+    let p = pcg(&full.a, &full.b, &mut q, prm.pressure).map_err(CouplingError::Pressure)?;
+    info.iterations = p.iterations as usize;
+    info.rel_residual = p.rel_residual;
+    info.interior_pressure = interior_pressure(
+        full,
+        &q,
+        grid.dx,
+        Scalars {
+            dt,
+            sigma: prm.surface.sigma,
+            viscosity: prm.surface.viscosity,
+            density: prm.surface.density,
+            dx: grid.dx,
+        },
+    );
+    let mut valid = full.apply(grid, &q, |_, _| 0.0);
+    extrapolate(grid, &mut valid, layers);
+    constrain_solids(grid, solids);
     if !surf.is_empty() {
         let sys = TensionSystem {
             laplacian: surf.laplacian.as_ref(),
@@ -320,7 +384,16 @@ fn solve_uncoupled(
             .info
             .iter()
             .fold(info.rel_residual, |m, s| m.max(s.rel_residual));
-        write_back(parts, surf, &sol.u);
+        let mut u = sol.u;
+        if prm.layer == LayerTension::Jump {
+            // the surface layer moves with the liquid it bounds
+            for (i, &s) in surf.nb.store.iter().enumerate() {
+                if surf.attached[i] {
+                    u[i] = grid.velocity(&parts.x[s]);
+                }
+            }
+        }
+        write_back(parts, surf, &u);
     }
     info.solve_s = t.elapsed().as_secs_f64();
     Ok(info)
@@ -379,8 +452,13 @@ fn solve_form(
     warm: Option<&WarmStart>,
     order: Option<&system::ParticleOrder>,
 ) -> Result<(system::Assembled, Vec<Real>, WarmStart), CouplingError> {
-    let reduced = (form == Form::Reduced)
-        .then(|| Poisson::build(grid, solids, |a, s| k.index(a, s).is_some()));
+    let reduced = (form == Form::Reduced).then(|| {
+        let mut r = Poisson::build(grid, solids, |a, s| k.index(a, s).is_some());
+        if !full.air.is_empty() {
+            r.set_air(grid, full.air.clone());
+        }
+        r
+    });
     let sys = assemble(
         form,
         reduced.as_ref().unwrap_or(full),
@@ -479,10 +557,12 @@ enum View<'a> {
     General(Csr<'a>),
 }
 
-/// u^{n+1} and the updated radii into the store (fixed particles keep theirs).
+/// u^{n+1} and the updated radii into the store (fixed particles keep theirs;
+/// a surface layer held in the solve by `coupling.layer: jump` is not fixed
+/// in the store and takes its u).
 fn write_back(parts: &mut Particles, surf: &surface::Surface, u: &[Vec3]) {
     for (i, &s) in surf.nb.store.iter().enumerate() {
-        if !surf.fixed[i] {
+        if !parts.fixed[s] {
             parts.v[s] = u[i];
         }
         if let Some(r) = surf.radius[i] {

@@ -74,6 +74,21 @@ pub enum BandVelocity {
     Extrapolated,
 }
 
+/// How a volume's surface layer (sheet particles with a volume particle
+/// within h) carries its tension (`coupling.layer`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LayerTension {
+    /// As eq. (24) writes it: the layer's particles carry σS(Lx), the
+    /// constraint faces of eq. (18) hand it to the grid (default).
+    #[default]
+    Coupled,
+    /// As a ghost-fluid pressure jump at the free surface, p = −σ n·(Lx)
+    /// from the layer's MLS curvature ([`super::jump`]); the layer then
+    /// constrains no face, free sheets and filaments keep eq. (24).
+    Jump,
+}
+
 /// Parameters of the coupled solve.
 #[derive(Clone, Debug)]
 pub struct CouplingParams {
@@ -116,6 +131,8 @@ pub struct CouplingParams {
     pub band: BandVelocity,
     /// Level-set radius of the volume particles (× Δx), `solver.surface_radius`.
     pub surface_radius: Real,
+    /// How a volume's surface layer carries its tension.
+    pub layer: LayerTension,
     /// Also evaluate the residual of the full eq. (24) for the solution
     /// (assembles the monolithic matrix when the Schur method ran).
     pub verify: bool,
@@ -176,6 +193,18 @@ pub struct CouplingInfo {
     /// Why the chosen method failed, when it did.
     #[serde(skip)]
     pub first_failure: Option<String>,
+    /// Free-surface faces given the surface layer's pressure jump
+    /// (`coupling.layer: jump`; 0 otherwise).
+    #[serde(default)]
+    pub jump_faces: usize,
+    /// Surface-layer particles that carry the jump (deep enough below,
+    /// [`super::jump::MIN_DEPTH`]); the others keep eq. (24).
+    #[serde(default)]
+    pub jump_particles: usize,
+    /// Liquid cells turned to air by moving the level set onto the surface
+    /// layer (`coupling.layer: jump`; 0 otherwise).
+    #[serde(default)]
+    pub trimmed_cells: usize,
     /// Mean pressure (Pa) of the liquid cells deeper than Δx below the
     /// surface (0 if none): the Young–Laplace jump of a droplet at rest.
     pub interior_pressure: Real,

@@ -67,6 +67,69 @@ pub struct Poisson {
     pub b: Vec<Real>,
     /// Free-surface faces whose θ was clamped to [`THETA_MIN`].
     pub theta_clamps: usize,
+    /// Scaled pressure q at the interface of free-surface faces that carry
+    /// a surface-tension jump ([`Poisson::set_air`]); elsewhere q = 0 there.
+    pub air: FaceValues,
+}
+
+/// Values on MAC faces `(axis, slot)`, sorted by face: a sparse table for
+/// the few faces of the free surface.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FaceValues(Vec<(u64, Real)>);
+
+impl FaceValues {
+    /// The table from `(axis, slot, value)` entries (any order; a face
+    /// given twice keeps its last value).
+    pub fn new(mut entries: Vec<(usize, usize, Real)>) -> FaceValues {
+        entries.sort_by_key(|e| (e.0, e.1));
+        entries.dedup_by(|b, a| {
+            let same = (a.0, a.1) == (b.0, b.1);
+            if same {
+                a.2 = b.2;
+            }
+            same
+        });
+        FaceValues(
+            entries
+                .into_iter()
+                .map(|(a, s, v)| (Self::key(a, s), v))
+                .collect(),
+        )
+    }
+
+    #[inline]
+    fn key(a: usize, s: usize) -> u64 {
+        ((a as u64) << 60) | s as u64
+    }
+
+    /// Value of face `(a, s)`, 0 where the table has none.
+    #[inline]
+    pub fn get(&self, a: usize, s: usize) -> Real {
+        if self.0.is_empty() {
+            return 0.0;
+        }
+        let k = Self::key(a, s);
+        self.0
+            .binary_search_by_key(&k, |e| e.0)
+            .map_or(0.0, |i| self.0[i].1)
+    }
+
+    /// Number of faces in the table.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// True without faces.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The entries `(axis, slot, value)` in face order.
+    pub fn iter(&self) -> impl Iterator<Item = (usize, usize, Real)> + '_ {
+        self.0
+            .iter()
+            .map(|&(k, v)| ((k >> 60) as usize, (k & ((1 << 60) - 1)) as usize, v))
+    }
 }
 
 /// The two sides of face `(a, s)` (axis `a`, the lower face of slot `s`):
@@ -193,7 +256,29 @@ impl Poisson {
             a,
             b,
             theta_clamps,
+            air: FaceValues::default(),
         }
+    }
+
+    /// Puts the scaled pressure `air` on the air side of free-surface faces
+    /// (a ghost-fluid Dirichlet value at the interface, Kang, Fedkiw & Liu
+    /// 2000: the liquid's pressure at the surface is σκ there instead of 0).
+    /// Each face must be one the system was built with (open, not
+    /// prescribed, not skipped) between a liquid cell and a non-liquid one;
+    /// other entries are ignored. The row of the liquid cell c gains
+    /// w_f q_Γ/θ_f on its right-hand side, and [`Self::apply`] uses q_Γ as
+    /// the air side's pressure.
+    pub fn set_air(&mut self, g: &MacGrid, air: FaceValues) {
+        let mut kept = Vec::with_capacity(air.len());
+        for (a, s, q) in air.iter() {
+            if let Some(sd) = self.face(g, a, s) {
+                if let (Some(c), None) | (None, Some(c)) = (sd.lo, sd.hi) {
+                    self.b[c as usize] += g.weight[a][s] * q / sd.theta;
+                    kept.push((a, s, q));
+                }
+            }
+        }
+        self.air = FaceValues::new(kept);
     }
 
     /// Unknown of slot `s`, if its cell is liquid.
@@ -244,8 +329,8 @@ impl Poisson {
                     }
                     match self.face(g, ax, s) {
                         Some(f) => {
-                            let ql = f.lo.map_or(0.0, |i| q[i as usize]);
-                            let qh = f.hi.map_or(0.0, |i| q[i as usize]);
+                            let ql = f.lo.map_or_else(|| self.air.get(ax, s), |i| q[i as usize]);
+                            let qh = f.hi.map_or_else(|| self.air.get(ax, s), |i| q[i as usize]);
                             (u - (qh - ql) / f.theta + extra(ax, s), 1)
                         }
                         None => (u, 0),

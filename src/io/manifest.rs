@@ -55,6 +55,18 @@ pub struct SubstepRecord {
     /// coupled solve or with another `coupling.face_mass`).
     #[serde(default)]
     pub mass_shift: Real,
+    /// Surface-layer particles that carried the pressure jump, and the
+    /// free-surface faces that took it (`coupling.layer: jump`; omitted
+    /// when 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub jump_particles: usize,
+    /// See `jump_particles`.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub jump_faces: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// Particle speed statistics (m/s).

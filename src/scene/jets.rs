@@ -97,6 +97,12 @@ pub struct CouplingSettings {
     /// normal from the sheet to the face) or `sheet` (the sheet's own).
     #[serde(default)]
     pub band: BandSetting,
+    /// How a volume's surface layer carries its tension: `coupled` (eq. 24,
+    /// through the constraint faces) or `jump` (a ghost-fluid pressure jump
+    /// σκ at the free surface from the layer's MLS curvature; free sheets
+    /// and filaments keep eq. 24).
+    #[serde(default)]
+    pub layer: crate::coupling::LayerTension,
     /// Order of the monolithic system's unknowns for ILU(0): `equation`
     /// ([q, u, λ] as eq. 24 writes it) or `particles_first` ([u, λ, q], the
     /// particles in reverse Cuthill–McKee order).
@@ -200,6 +206,7 @@ impl Default for CouplingSettings {
             restart: default_restart(),
             face_mass: FaceMassSetting::Balanced,
             band: BandSetting::Extrapolated,
+            layer: crate::coupling::LayerTension::Coupled,
             ordering: crate::coupling::IluOrder::default(),
             face_fill: default_face_fill(),
             shared_block: default_shared_block(),

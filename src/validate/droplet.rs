@@ -11,7 +11,7 @@
 //! `surface_radius` Δx around the volume particles (see `docs/decisions.md`
 //! for its effect on the Young–Laplace jump and on the oscillation).
 
-use crate::coupling::{BandVelocity, FaceMass, Method};
+use crate::coupling::{BandVelocity, FaceMass, LayerTension, Method};
 use crate::grid::MacGrid;
 use crate::math::{Real, Vec3};
 use crate::particles::Codim;
@@ -39,6 +39,8 @@ pub struct DropletCase {
     pub band: BandVelocity,
     /// Smallest mass fraction of a constraint face (`coupling.mass_floor`).
     pub mass_floor: Real,
+    /// How the surface layer carries its tension (`coupling.layer`).
+    pub layer: LayerTension,
     /// Relative elongation e along y of the l = 2 ellipsoid (volume
     /// preserving: y × (1 + e), x and z × (1 + e)^{-1/2}); 0 for a sphere.
     pub elongation: Real,
@@ -56,6 +58,7 @@ impl DropletCase {
             face_mass: FaceMass::Balanced,
             band: BandVelocity::default(),
             mass_floor: crate::coupling::system::MASS_FLOOR,
+            layer: LayerTension::Coupled,
             elongation: 0.0,
         }
     }
@@ -106,6 +109,7 @@ impl DropletCase {
         cp.face_mass = self.face_mass;
         cp.band = self.band;
         cp.mass_floor = self.mass_floor;
+        cp.layer = self.layer;
         prm.coupling = Some(cp);
         let grid = MacGrid::new(prm.lo, prm.hi, dx);
         Ok((SimState::new(parts, grid, solids), prm))

@@ -16,6 +16,7 @@
 //! (the cell fraction of the lower face), since a slab a few cells thick
 //! sees the grid (docs/decisions.md, "Thick sheet edges").
 
+use crate::coupling::LayerTension;
 use crate::grid::MacGrid;
 use crate::math::Real;
 use crate::scene::{load_str, sample_bodies, SceneError};
@@ -40,6 +41,8 @@ pub struct SlabCase {
     pub sigma: Real,
     /// Level-set radius of the liquid, relative to Δx (`solver.surface_radius`).
     pub surface_radius: Real,
+    /// How the surface layer carries its tension (`coupling.layer`).
+    pub layer: LayerTension,
 }
 
 impl SlabCase {
@@ -54,6 +57,7 @@ impl SlabCase {
             length: 0.04,
             sigma: 0.045,
             surface_radius: 1.0,
+            layer: LayerTension::Coupled,
         }
     }
 
@@ -96,6 +100,7 @@ impl SlabCase {
              time: {{fps: 100, frames: 1}}\n\
              physics: {{gravity: [0,0,0], surface_tension: {s}}}\n\
              solver: {{surface_radius: {sr}}}\n\
+             coupling: {{layer: {layer}}}\n\
              bodies:\n  - {{kind: box, min: [{a},{b},{c}], max: [{d},{e},{f}], spacing: 0.5}}\n",
             x = hi[0] + lo[0],
             y = hi[1] + lo[1],
@@ -103,6 +108,10 @@ impl SlabCase {
             dx = self.dx,
             s = self.sigma,
             sr = self.surface_radius,
+            layer = match self.layer {
+                LayerTension::Coupled => "coupled",
+                LayerTension::Jump => "jump",
+            },
             a = lo[0],
             b = lo[1],
             c = lo[2],

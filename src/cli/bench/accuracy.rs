@@ -7,7 +7,7 @@
 use super::operators::{plot, Point};
 use anyhow::Result;
 use clap::Args;
-use codimfx::coupling::{BandVelocity, FaceMass};
+use codimfx::coupling::{BandVelocity, FaceMass, LayerTension};
 use codimfx::validate::droplet::{oscillate, DropletCase};
 use codimfx::Real;
 use std::path::PathBuf;
@@ -40,6 +40,9 @@ pub struct AccuracyArgs {
     /// Solve the coupled system with λ eliminated (the Schur form).
     #[arg(long)]
     schur: bool,
+    /// How the surface layer carries its tension (`coupling.layer`).
+    #[arg(long, value_enum, default_value_t = LayerArg::Coupled)]
+    layer: LayerArg,
     /// Write the error-against-time chart to this PNG.
     #[arg(long)]
     plot: Option<PathBuf>,
@@ -57,6 +60,24 @@ pub enum FaceMassArg {
     LevelSet,
 }
 
+/// `--layer` (`coupling.layer`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum LayerArg {
+    /// Through the constraint faces of eq. (24).
+    Coupled,
+    /// A ghost-fluid pressure jump at the free surface.
+    Jump,
+}
+
+impl From<LayerArg> for LayerTension {
+    fn from(a: LayerArg) -> LayerTension {
+        match a {
+            LayerArg::Coupled => LayerTension::Coupled,
+            LayerArg::Jump => LayerTension::Jump,
+        }
+    }
+}
+
 /// `--band`.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 pub enum BandArg {
@@ -70,8 +91,8 @@ pub enum BandArg {
 pub fn run(a: AccuracyArgs) -> Result<()> {
     println!("threads: {}\n", rayon::current_num_threads());
     println!(
-        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, mass floor {}, band {:?})\n",
-        a.surface_radius, a.face_mass, a.mass_floor, a.band
+        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, mass floor {}, band {:?}, layer {:?})\n",
+        a.surface_radius, a.face_mass, a.mass_floor, a.band, a.layer
     );
     println!(
         "| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | wall (s) |"
@@ -83,6 +104,7 @@ pub fn run(a: AccuracyArgs) -> Result<()> {
             let case = DropletCase {
                 surface_radius: a.surface_radius,
                 mass_floor: a.mass_floor,
+                layer: a.layer.into(),
                 face_mass: match a.face_mass {
                     FaceMassArg::Balanced => FaceMass::Balanced,
                     FaceMassArg::Sheet => FaceMass::Sheet,

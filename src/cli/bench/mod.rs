@@ -1,7 +1,7 @@
 //! `codimfx bench …`: one file per benchmark target.
 use clap::{Args, Subcommand};
 
-mod accuracy;
+pub mod accuracy;
 mod coupling;
 mod films;
 mod neighbors;
