@@ -268,31 +268,9 @@ pub fn capillary_limit(scene: &crate::scene::Scene, dx: Real) -> Real {
 
 #[cfg(test)]
 mod tests {
+    use super::super::release::tests::block;
     use super::*;
     use crate::grid::pcg::{pcg, PcgParams};
-    use crate::grid::transfer::transfer_to_grid;
-    use crate::particles::{Codim, Particles};
-    use crate::solids::SolidSet;
-
-    /// A block of liquid at rest (volume particles spaced Δx/3 over
-    /// [0.2, 1.167]³, Δx = 0.1) and its pressure system.
-    fn block() -> (MacGrid, Poisson) {
-        let dx = 0.1;
-        let mut p = Particles::default();
-        for i in 0..30 {
-            for j in 0..30 {
-                for k in 0..30 {
-                    let x =
-                        Vec3::new(i as Real, j as Real, k as Real) * (dx / 3.0) + Vec3::repeat(0.2);
-                    p.push(x, Vec3::zeros(), 1.0, 0.01, Codim::Volume);
-                }
-            }
-        }
-        let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.4), dx);
-        transfer_to_grid(&mut g, &p, &SolidSet::default(), 2, 1.0, false, false, None);
-        let sys = Poisson::build(&g, &SolidSet::default(), |_, _| false);
-        (g, sys)
-    }
 
     /// Every free-surface face of `sys`, with the value `f` at its
     /// interface point.

@@ -249,16 +249,17 @@ pub fn outlier_cells(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::super::faces::constraints;
     use super::*;
     use crate::grid::transfer::transfer_to_grid;
     use crate::particles::{Codim, Particles};
     use crate::solids::SolidSet;
 
-    /// The grid and pressure system of a block of liquid (volume particles
-    /// spaced Δx/3 over [0.2, 1.167]³, Δx = 0.1).
-    fn block() -> (MacGrid, Poisson) {
+    /// The grid and pressure system of a block of liquid at rest (volume
+    /// particles spaced Δx/3 over [0.2, 1.167]³, Δx = 0.1; also used by
+    /// `jump`'s tests).
+    pub(crate) fn block() -> (MacGrid, Poisson) {
         let dx = 0.1;
         let mut p = Particles::default();
         for i in 0..30 {
