@@ -67,8 +67,8 @@ fn depth(cells: &CellGrid, volume: &[Vec3], x: &Vec3, n: &Vec3, s: Real, limit: 
 /// Outward normal and surface pressure of each attached sheet particle
 /// whose body is at least [`MIN_DEPTH`] Δx deep below it (`None` for
 /// other particles). The normal is the MLS normal turned away
-/// from the centroid of the volume particles within h (`volume`: their
-/// positions); on a stream one or two cells thick the level set one cell
+/// from the centroid of the volume particles within h (`surf.volume`, whose
+/// cell grid has size h); on a stream one or two cells thick the level set one cell
 /// along −n can lie outside again, and a normal oriented by it bent the
 /// dripping stream sideways. The layer's particles sit half
 /// a volume spacing `s` inside the liquid's surface, so the mean curvature
@@ -76,7 +76,6 @@ fn depth(cells: &CellGrid, volume: &[Vec3], x: &Vec3, n: &Vec3, s: Real, limit: 
 /// κ_Γ = κ/(1 + κ s/4), and p = σκ_Γ (2σ/R on a sphere of radius R).
 pub fn layer_points(
     surf: &Surface,
-    volume: &[Vec3],
     h: Real,
     dx: Real,
     sigma: Real,
@@ -85,10 +84,10 @@ pub fn layer_points(
     let Ok(l) = Csr::from_faer(surf.laplacian.as_ref()) else {
         return vec![None; surf.len()];
     };
-    if volume.is_empty() {
+    let Some((volume, cells)) = &surf.volume else {
         return vec![None; surf.len()];
-    }
-    let cells = CellGrid::build(volume, h);
+    };
+    let volume = volume.as_slice();
     (0..surf.len())
         .into_par_iter()
         .map(|i| {
@@ -111,7 +110,7 @@ pub fn layer_points(
                 -n
             };
             let s = spacing.clamp(0.1 * dx, h / 1.5);
-            if depth(&cells, volume, &x, &n, s, MIN_DEPTH * dx) < MIN_DEPTH * dx {
+            if depth(cells, volume, &x, &n, s, MIN_DEPTH * dx) < MIN_DEPTH * dx {
                 return None;
             }
             let (lo, hi) = (l.row_ptr[i], l.row_ptr[i + 1]);

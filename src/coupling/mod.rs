@@ -80,18 +80,11 @@ pub fn solve(
     // with the jump, a volume's surface layer (where the body is deep enough)
     // takes no tension row: it is held at its velocity in the particle block
     // and moves with the grid
-    let spacing = volume_spacing(volume_totals(parts), prm.surface.density);
+    let totals = volume_totals(parts);
+    let spacing = volume_spacing(totals, prm.surface.density);
     let points = jump.then(|| {
-        let volume: Vec<Vec3> = parts
-            .x
-            .iter()
-            .zip(&parts.codim)
-            .filter(|(_, c)| **c == crate::particles::Codim::Volume)
-            .map(|(x, _)| *x)
-            .collect();
-        let h = prm.surface.mls.h;
-        let s = spacing.unwrap_or(0.0);
-        jump::layer_points(&surf, &volume, h, grid.dx, prm.surface.sigma, s)
+        let (h, s) = (prm.surface.mls.h, spacing.unwrap_or(0.0));
+        jump::layer_points(&surf, h, grid.dx, prm.surface.sigma, s)
     });
     if let Some(p) = &points {
         info.jump_particles = p.iter().filter(|x| x.is_some()).count();
@@ -111,7 +104,7 @@ pub fn solve(
     // the grid's system and K, and beside them the particles' order in the
     // coupled system (it needs only the Laplacian's pattern)
     let ((full, constrained, released, shift), order) = {
-        let (grid, parts) = (&*grid, &*parts);
+        let grid = &*grid;
         rayon::join(
             || {
                 let full = Poisson::build(grid, solids, |_, _| false);
@@ -122,8 +115,7 @@ pub fn solve(
                 constrained.floor = prm.mass_floor;
                 let released = constrained.release_enclosed(grid, &full, sheets);
                 let mut shift_used = None;
-                let totals = volume_totals(parts);
-                if let Some(s) = volume_spacing(totals, prm.surface.density) {
+                if let Some(s) = spacing {
                     let shift = prm.surface_radius * grid.dx - 0.5 * s;
                     match prm.face_mass {
                         FaceMass::Sheet => constrained.set_mass(grid, &full, shift),

@@ -103,6 +103,9 @@ pub struct Surface {
     /// Sheet particles on a liquid body's surface (a volume particle
     /// within h); joint order, `false` for filaments.
     pub attached: Vec<bool>,
+    /// Positions of the volume particles (store order) with their cell grid
+    /// of size h, which decided `attached`; `None` without volume particles.
+    pub volume: Option<(Vec<Vec3>, CellGrid)>,
     /// Classification counts.
     pub counts: SurfaceCounts,
     /// Updated radii (half thickness of free sheets, tube radius of
@@ -314,14 +317,16 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
         .filter(|(_, c)| **c == Codim::Volume)
         .map(|(x, _)| *x)
         .collect();
-    let on_volume: Vec<bool> = if volume_x.is_empty() {
-        vec![false; n_sheet]
-    } else {
+    let volume = (!volume_x.is_empty()).then(|| {
         let grid = CellGrid::build(&volume_x, h);
-        nb.x[..n_sheet]
+        (volume_x, grid)
+    });
+    let on_volume: Vec<bool> = match &volume {
+        None => vec![false; n_sheet],
+        Some((vx, grid)) => nb.x[..n_sheet]
             .par_iter()
-            .map(|x| grid.any_within(&volume_x, x, h))
-            .collect()
+            .map(|x| grid.any_within(vx, x, h))
+            .collect(),
     };
     let terms = particle_terms(
         &nb,
@@ -361,6 +366,7 @@ pub fn build(parts: &Particles, prm: &SurfaceParams) -> Result<Surface, MlsError
         radius: rows.iter().map(|r| r.2).collect(),
         axes: frames.iter().map(|f| f.axes).collect(),
         attached: (0..n).map(|i| i < n_sheet && on_volume[i]).collect(),
+        volume,
         laplacian: lap.matrix,
         fits: lap.stats,
         counts,
