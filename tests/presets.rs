@@ -42,7 +42,7 @@ fn table1(name: &str) -> Option<Table1Row> {
         }
         "droplet_collision" => ([64, 64, 64], Some((191e3, 20e3))),
         n if n.starts_with("dripping") => ([64, 200, 64], None),
-        "fluid_chain" | "fluid_chain_fast" => ([96, 256, 96], None),
+        "fluid_chain" | "fluid_chain_fast" | "fluid_chain_links" => ([96, 256, 96], None),
         "waterbell" => ([192, 192, 192], None),
         "polygon" | "polygon8" | "polygon_fast" | "polygon8_fast" => ([192, 72, 192], None),
         _ => return None,
