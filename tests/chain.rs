@@ -10,8 +10,10 @@
 //! sin³45° ρa²v₀²/σ = 40.7 mm across. Its rims then pull it shut below: the
 //! first link.
 use codimfx::particles::Codim;
-use codimfx::sim::{RunOptions, Sim};
+use codimfx::sim::Sim;
 use std::sync::atomic::AtomicBool;
+
+mod common;
 
 /// Extent (1st to 99th percentile) along z and along x of the sheet,
 /// filament and volume particles with y in [lo, hi); `None` with fewer than
@@ -38,24 +40,7 @@ fn extents(sim: &Sim, lo: f64, hi: f64) -> Option<(f64, f64)> {
 
 #[test]
 fn the_collision_sheet_opens_to_its_taylor_width_and_closes_into_a_link() {
-    let tmp = tempfile::tempdir().unwrap();
-    let scene = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/fluid_chain_links.yaml"
-    ));
-    let text = std::fs::read_to_string(scene).unwrap();
-    let mut sim = Sim::open_text(
-        &text,
-        scene,
-        &RunOptions {
-            out_root: Some(tmp.path().to_path_buf()),
-            frames: Some(22),
-            resume: false,
-            scale: Some(2.0),
-            verbose: false,
-        },
-    )
-    .unwrap();
+    let (mut sim, _cache) = common::open_preset("fluid_chain_links", 22, Some(2.0), |t| t);
     sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();
     assert!(sim.state.particles.all_finite());
     let (sigma, a, v0) = (0.2, 0.008, 0.6);

@@ -4,8 +4,9 @@
 //! outline's Fourier modes (`codimfx outline`).
 use codimfx::math::Vec3;
 use codimfx::outline::outline_modes;
-use codimfx::sim::{RunOptions, Sim};
 use std::sync::atomic::AtomicBool;
+
+mod common;
 
 #[test]
 fn the_saw_tooth_rim_tension_sets_the_polygon_corner_count() {
@@ -16,29 +17,14 @@ fn the_saw_tooth_rim_tension_sets_the_polygon_corner_count() {
     // 5 (3.1 mm) and 12 (2.7 mm); with five teeth mode 5 reaches 9.1 mm
     // (docs/decisions.md, "The saw-tooth's amplitude"). It must lead,
     // clearly ahead of the next mode.
-    let tmp = tempfile::tempdir().unwrap();
-    let scene = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/polygon_fast.yaml"
-    ));
-    let text = std::fs::read_to_string(scene).unwrap();
     let six = "    corners: 6 ";
-    assert!(
-        text.contains(six) && text.contains("amplitude: 0.9 "),
-        "preset changed"
-    );
-    let mut sim = Sim::open_text(
-        &text.replace(six, "    corners: 5 "),
-        scene,
-        &RunOptions {
-            out_root: Some(tmp.path().to_path_buf()),
-            frames: Some(40),
-            resume: false,
-            scale: Some(2.0),
-            verbose: false,
-        },
-    )
-    .unwrap();
+    let (mut sim, _cache) = common::open_preset("polygon_fast", 40, Some(2.0), |text| {
+        assert!(
+            text.contains(six) && text.contains("amplitude: 0.9 "),
+            "preset changed"
+        );
+        text.replace(six, "    corners: 5 ")
+    });
     let m0 = sim.state.particles.total_mass();
     let centre = Vec3::new(0.2, 0.075, 0.2);
     let mut last = None;

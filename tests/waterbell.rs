@@ -13,8 +13,10 @@
 //! 6 mm at r₀, so the thin-sheet estimate only bounds it), stays within
 //! ~9–10 mm of the axis and closes ~9 cm below (docs/presets.md).
 use codimfx::particles::Codim;
-use codimfx::sim::{RunOptions, Sim};
+use codimfx::sim::Sim;
 use std::sync::atomic::AtomicBool;
+
+mod common;
 
 /// Sheet, filament and point particles in the horizontal band [lo, hi) of
 /// heights: their distances from the jets' axis (x = z = 0.2 m).
@@ -39,24 +41,7 @@ fn band(sim: &Sim, lo: f64, hi: f64) -> (Vec<f64>, usize) {
 
 #[test]
 fn the_falling_sheet_closes_into_a_bell() {
-    let tmp = tempfile::tempdir().unwrap();
-    let scene = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/waterbell.yaml"
-    ));
-    let text = std::fs::read_to_string(scene).unwrap();
-    let mut sim = Sim::open_text(
-        &text,
-        scene,
-        &RunOptions {
-            out_root: Some(tmp.path().to_path_buf()),
-            frames: Some(32),
-            resume: false,
-            scale: None,
-            verbose: false,
-        },
-    )
-    .unwrap();
+    let (mut sim, _cache) = common::open_preset("waterbell", 32, None, |t| t);
     sim.run(&AtomicBool::new(false), |_, _| {}).unwrap();
     assert!(sim.state.particles.all_finite());
     let inside = |r: &[f64], d: f64| r.iter().filter(|&&x| x < d).count() as f64 / r.len() as f64;
