@@ -204,6 +204,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
             bud_angle: std::f64::consts::PI / 6.0,
             rim_modulation: s.film.rim_modulation.as_ref().map(|m| m.sawtooth()),
             diffusive: s.film.diffusive(),
+            tension_theta: s.coupling.tension_theta,
         },
         pressure: PcgParams {
             tolerance: s.solver.pressure_tolerance,

@@ -205,6 +205,9 @@ pub struct TensionSystem<'a> {
     /// Take only the diffusive part of L implicitly and the rest on u^n
     /// ([`split`], `film.implicit: diffusive`).
     pub diffusive: bool,
+    /// Implicit weight θ of the tension: σS L(xⁿ + θΔt uⁿ⁺¹); 1 is eq. (16)'s
+    /// backward Euler, 1/2 the least that stays unconditionally stable.
+    pub theta: Real,
 }
 
 /// Which part of the curvature vector ∇²x^n = (L x^n)_i drives the
@@ -290,7 +293,7 @@ pub fn assemble(sys: &TensionSystem) -> Result<SparseRowMat<usize, Real>, SolveE
 /// The factor σΔt² S_i/m_i + νΔt of L's row i in the implicit term of the
 /// mass-scaled eq. (16) (non-fixed rows).
 fn implicit_scale(sys: &TensionSystem, i: usize) -> Real {
-    sys.sigma * sys.dt * sys.dt * sys.area[i] / sys.mass[i] + sys.nu * sys.dt
+    sys.theta * sys.sigma * sys.dt * sys.dt * sys.area[i] / sys.mass[i] + sys.nu * sys.dt
 }
 
 /// Solves eq. (16)/(17) for u^{n+1}, component by component with one

@@ -51,6 +51,7 @@ fn ring_contracts_at_the_laplace_rate_and_fixed_rows_hold() {
         dt,
         curvature: CurvaturePart::Full,
         diffusive: false,
+        theta: 1.0,
     };
     let sol = solve(&sys, &BicgstabParams::default()).unwrap();
     let expect = dt * sigma * area[0] / (mass[0] * r);
@@ -95,6 +96,7 @@ fn implicit_viscosity_damps_a_ring_mode_at_the_backward_euler_rate() {
         dt,
         curvature: CurvaturePart::Full,
         diffusive: false,
+        theta: 1.0,
     };
     let sol = solve(&sys, &BicgstabParams::default()).unwrap();
     let factor = 1.0 / (1.0 + nu * dt * k * k / (r * r));
@@ -132,6 +134,7 @@ fn large_steps_stay_bounded() {
         dt: 0.05,
         curvature: CurvaturePart::Full,
         diffusive: false,
+        theta: 1.0,
     };
     let sol = solve(&sys, &BicgstabParams::default()).unwrap();
     let explicit = 0.05 * 3.0 * 1e-5 / (1e-7 * r);

@@ -9,7 +9,7 @@ use codimfx::coupling::{BandVelocity, FaceMass};
 use codimfx::math::Real;
 use codimfx::particles::Codim;
 use codimfx::step::{step, SimState, StageTimes, StepParams};
-use codimfx::validate::droplet::{oscillate, DropletCase};
+use codimfx::validate::droplet::{oscillate, oscillate_period, DropletCase};
 
 const R: Real = 0.0128;
 const SIGMA: Real = 0.03;
@@ -286,6 +286,37 @@ fn l2_oscillation_period_is_within_one_and_a_half_percent_of_rayleigh_at_the_dro
         );
     }
     assert_period_within(&case, 0.015);
+}
+
+#[test]
+fn the_half_implicit_tension_damps_the_l2_oscillation_less_than_backward_euler() {
+    // R = 4 Δx, e = 0.05, Δt = 0.01 s, one whole period. An inviscid droplet
+    // keeps its swing (water at this size: 0.991 a half period). Backward
+    // Euler on the tension (θ = 1, the paper's) takes e^{−πωΔt} ≈ 0.71 of
+    // the amplitude a period on top of the grid's own damping; θ = 1/2
+    // halves that exponent (docs/decisions.md, "The tension's implicit
+    // weight"). Measured swing ratios 0.72 (θ = 1) and 0.78 (θ = 1/2).
+    let ratio = |theta: Real| {
+        let case = DropletCase {
+            elongation: 0.05,
+            tension_theta: theta,
+            ..DropletCase::paper(4.0)
+        };
+        let o = oscillate_period(&case, 0.01).unwrap();
+        assert!(
+            o.error.abs() < 0.03,
+            "θ = {theta}: period {:+.1} %",
+            100.0 * o.error
+        );
+        o.swing_ratio.unwrap()
+    };
+    assert_eq!(DropletCase::paper(4.0).tension_theta, 0.5);
+    let (half, backward) = (ratio(0.5), ratio(1.0));
+    assert!(half > 0.75, "θ = 1/2 keeps {half:.3} of the swing");
+    assert!(
+        half > backward + 0.03,
+        "θ = 1/2 keeps {half:.3}, θ = 1 {backward:.3}"
+    );
 }
 
 /// The l = 2 period of `case` at Δt = 0.01 s is within `tol` of Rayleigh's.

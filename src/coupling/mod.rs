@@ -150,6 +150,7 @@ pub fn solve(
         viscosity: prm.surface.viscosity,
         density: prm.surface.density,
         dx: grid.dx,
+        theta: prm.surface.tension_theta,
     };
     let mut full = full;
     if let Some(p) = &points {
@@ -346,6 +347,7 @@ fn solve_uncoupled(
             viscosity: prm.surface.viscosity,
             density: prm.surface.density,
             dx: grid.dx,
+            theta: prm.surface.tension_theta,
         },
     );
     let mut valid = full.apply(grid, &q, |_, _| 0.0);
@@ -369,6 +371,7 @@ fn solve_uncoupled(
                 n_sheet: surf.n_sheet(),
             },
             diffusive: prm.surface.diffusive,
+            theta: prm.surface.tension_theta,
         };
         let sol = solve_tension(&sys, &prm.solver).map_err(solve_err("surface tension"))?;
         info.iterations += sol.info.iter().map(|s| s.iterations).sum::<usize>();

@@ -43,6 +43,9 @@ pub struct SurfaceParams {
     /// is solved on its own ([`crate::tension::split`]; the monolithic
     /// system of eq. 24 keeps L whole).
     pub diffusive: bool,
+    /// Implicit weight θ of the tension, in [1/2, 1]: the force is
+    /// σS L(xⁿ + θΔt uⁿ⁺¹) (`coupling.tension_theta`; the paper's is 1).
+    pub tension_theta: Real,
 }
 
 /// Counts of the particle side.

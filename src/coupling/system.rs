@@ -4,7 +4,8 @@
 //! Scaled unknowns: q = Δt p / (ρ Δx) per liquid cell (m/s, the grid's
 //! pressure scaling), u per sheet/filament particle (m/s, three rows each,
 //! interleaved), and μ_f = λ_f / (ρ Δx³ w_f) per constraint face (m/s: the
-//! impulse per unit face mass). With m̂ = m/(ρΔx³), ĉ = σΔt²S/(ρΔx³) and
+//! impulse per unit face mass). With m̂ = m/(ρΔx³), ĉ = θσΔt²S/(ρΔx³) (θ the
+//! tension's implicit weight, 1 in the paper) and
 //! s_{c,f} = +1 when c is the cell below face f, −1 above it:
 //!
 //! - cell c (eq. 20):    A q + Σ_f s_{c,f} (w_f/θ_f) μ_f = b_c
@@ -75,6 +76,8 @@ pub struct Scalars {
     pub density: Real,
     /// Cell size Δx (m).
     pub dx: Real,
+    /// Implicit weight θ of the tension ([`super::surface::SurfaceParams::tension_theta`]).
+    pub theta: Real,
 }
 
 /// Which system to build.
@@ -270,7 +273,7 @@ pub fn assemble(
         } else {
             sc.viscosity * sc.dt * surf.mass[i] / sc.density
         };
-        (sc.sigma * sc.dt * sc.dt * surf.area[i] + visc) / vol
+        (sc.theta * sc.sigma * sc.dt * sc.dt * surf.area[i] + visc) / vol
     };
     let mut t: Vec<Triplet<usize, usize, Real>> = Vec::with_capacity(
         7 * nq + 3 * l.val.len() * (!shared_p) as usize + 4 * k.col.len() + 4 * k.len(),

@@ -379,6 +379,8 @@ pub fn step(
         bud_angle: prm.bud_angle,
         rim_modulation: prm.rim_modulation,
         diffusive: prm.diffusive,
+        // not read by particle_terms; the film's solve below keeps θ = 1
+        tension_theta: 1.0,
     };
     let terms = particle_terms(&nb, &frames, |i| film.mass[i], |_| prm.free_film, &sp);
     let voronoi: Vec<Real> = terms.iter().map(|t| t.voronoi).collect();
@@ -504,6 +506,7 @@ pub fn step(
             n_sheet,
         },
         diffusive: prm.diffusive,
+        theta: 1.0,
     };
     let sol = solve_tension(&sys, &prm.solver).map_err(|e| FilmError::Solve {
         stage: "surface tension",

@@ -134,6 +134,13 @@ pub struct CouplingSettings {
     /// (the l = 2 period) and costs iterations (`docs/decisions.md`).
     #[serde(default = "default_mass_floor")]
     pub mass_floor: f64,
+    /// Implicit weight θ of the tension, in [0.5, 1]: the particles feel
+    /// σS L(xⁿ + θΔt uⁿ⁺¹). The paper's backward Euler (1) damps a capillary
+    /// oscillation of frequency ω by e^{−πωΔt} a period; 0.5 halves that
+    /// exponent and is the smallest θ that stays stable at any Δt
+    /// (`docs/decisions.md`, "The tension's implicit weight").
+    #[serde(default = "default_tension_theta")]
+    pub tension_theta: f64,
 }
 
 /// `coupling.krylov`.
@@ -153,6 +160,10 @@ fn default_restart() -> u32 {
 
 fn default_mass_floor() -> f64 {
     crate::coupling::system::MASS_FLOOR
+}
+
+fn default_tension_theta() -> f64 {
+    0.5
 }
 
 /// `coupling.band`.
@@ -213,6 +224,7 @@ impl Default for CouplingSettings {
             tail_fill: default_tail_fill(),
             fill_passes: default_fill_passes(),
             mass_floor: default_mass_floor(),
+            tension_theta: default_tension_theta(),
         }
     }
 }
@@ -354,6 +366,12 @@ pub fn validate(s: &Scene) -> Check {
         return fail(
             "coupling.mass_floor",
             format!("must be in [1e-4, 1], got {}", c.mass_floor),
+        );
+    }
+    if !(c.tension_theta.is_finite() && (0.5..=1.0).contains(&c.tension_theta)) {
+        return fail(
+            "coupling.tension_theta",
+            format!("must be in [0.5, 1], got {}", c.tension_theta),
         );
     }
     Ok(())

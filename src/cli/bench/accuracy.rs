@@ -8,7 +8,7 @@ use super::operators::{plot, Point};
 use anyhow::Result;
 use clap::Args;
 use codimfx::coupling::{BandVelocity, FaceMass, LayerTension};
-use codimfx::validate::droplet::{oscillate, DropletCase};
+use codimfx::validate::droplet::{oscillate, oscillate_period, DropletCase};
 use codimfx::Real;
 use std::path::PathBuf;
 
@@ -43,6 +43,13 @@ pub struct AccuracyArgs {
     /// How the surface layer carries its tension (`coupling.layer`).
     #[arg(long, value_enum, default_value_t = LayerArg::Coupled)]
     layer: LayerArg,
+    /// Implicit weight θ of the tension (`coupling.tension_theta`, [0.5, 1]).
+    #[arg(long, default_value_t = 0.5)]
+    tension_theta: Real,
+    /// Run each case a whole period and print the swing ratio (the
+    /// numerical damping: 1 without any, 0.991 for water at this size).
+    #[arg(long)]
+    damping: bool,
     /// Write the error-against-time chart to this PNG.
     #[arg(long)]
     plot: Option<PathBuf>,
@@ -89,21 +96,31 @@ pub enum BandArg {
 
 /// Runs the benchmark and prints a markdown table.
 pub fn run(a: AccuracyArgs) -> Result<()> {
+    if !(0.5..=1.0).contains(&a.tension_theta) {
+        anyhow::bail!(
+            "--tension-theta must be in [0.5, 1], got {}",
+            a.tension_theta
+        );
+    }
     println!("threads: {}\n", rayon::current_num_threads());
     println!(
-        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, mass floor {}, band {:?}, layer {:?})\n",
-        a.surface_radius, a.face_mass, a.mass_floor, a.band, a.layer
+        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, mass floor {}, band {:?}, layer {:?}, tension θ {})\n",
+        a.surface_radius, a.face_mass, a.mass_floor, a.band, a.layer, a.tension_theta
     );
-    println!(
-        "| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | wall (s) |"
-    );
-    println!("|---|---|---|---|---|---|---|---|");
+    if a.damping {
+        println!("| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | swing ratio | wall (s) |");
+        println!("|---|---|---|---|---|---|---|---|---|");
+    } else {
+        println!("| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | wall (s) |");
+        println!("|---|---|---|---|---|---|---|---|");
+    }
     let mut points = Vec::new();
     for (series, &dt) in a.dt.iter().enumerate() {
         for &cells in &a.cells {
             let case = DropletCase {
                 surface_radius: a.surface_radius,
                 mass_floor: a.mass_floor,
+                tension_theta: a.tension_theta,
                 layer: a.layer.into(),
                 face_mass: match a.face_mass {
                     FaceMassArg::Balanced => FaceMass::Balanced,
@@ -122,14 +139,20 @@ pub fn run(a: AccuracyArgs) -> Result<()> {
                 elongation: 0.05,
                 ..DropletCase::paper(cells)
             };
-            let o = oscillate(&case, dt)?;
+            let o = if a.damping {
+                oscillate_period(&case, dt)?
+            } else {
+                oscillate(&case, dt)?
+            };
             println!(
-                "| {cells} | {dt} | {} | {} | {:.4} | {:.4} | {:+.1} % | {:.1} |",
+                "| {cells} | {dt} | {} | {} | {:.4} | {:.4} | {:+.1} % |{} {:.1} |",
                 o.particles,
                 o.steps,
                 o.period,
                 o.rayleigh,
                 100.0 * o.error,
+                o.swing_ratio
+                    .map_or(String::new(), |r| format!(" {r:.3} |")),
                 o.wall_s
             );
             points.push(Point {
