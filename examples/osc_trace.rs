@@ -4,7 +4,7 @@
 //! Arguments (optional): R/Δx (4), Δt (0.01), elongation e (0.05).
 //! Environment: THETA (`coupling.tension_theta`), FLIP (`solver.flip`),
 //! APIC (APIC transfer), NOTRANS / NORESEED (no transitions / reseeding),
-//! LAYER=jump, SIGMA (σ in N/m), INITV=A (start from the potential flow
+//! LAYER=jump, BAND=sheet (`coupling.band: sheet`), SIGMA (σ in N/m), INITV=A (start from the potential flow
 //! A(−x, 2y, −z) instead of rest; with SIGMA≈0 the kinetic energy should stay).
 use codimfx::math::Real;
 use codimfx::step::{step, StageTimes};
@@ -22,6 +22,9 @@ fn main() {
     }
     if let Ok(t) = std::env::var("THETA") {
         case.tension_theta = t.parse().unwrap();
+    }
+    if std::env::var("BAND").is_ok_and(|v| v == "sheet") {
+        case.band = codimfx::coupling::BandVelocity::Sheet;
     }
     if let Ok(sg) = std::env::var("SIGMA") {
         case.sigma = sg.parse().unwrap();

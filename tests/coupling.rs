@@ -295,7 +295,9 @@ fn the_half_implicit_tension_damps_the_l2_oscillation_less_than_backward_euler()
     // Euler on the tension (θ = 1, the paper's) takes e^{−πωΔt} ≈ 0.71 of
     // the amplitude a period on top of the grid's own damping; θ = 1/2
     // halves that exponent (docs/decisions.md, "The tension's implicit
-    // weight"). Measured swing ratios 0.72 (θ = 1) and 0.78 (θ = 1/2).
+    // weight"). Measured swing ratios 0.777 (θ = 1) and 0.841 (θ = 1/2)
+    // with the band's whole-gradient correction; 0.719 for θ = 1 with the
+    // normal derivative only (the build before session 33).
     let ratio = |theta: Real| {
         let case = DropletCase {
             elongation: 0.05,
@@ -312,7 +314,8 @@ fn the_half_implicit_tension_damps_the_l2_oscillation_less_than_backward_euler()
     };
     assert_eq!(DropletCase::paper(4.0).tension_theta, 0.5);
     let (half, backward) = (ratio(0.5), ratio(1.0));
-    assert!(half > 0.75, "θ = 1/2 keeps {half:.3} of the swing");
+    eprintln!("swing ratio: θ = 1/2 {half:.3}, θ = 1 {backward:.3}");
+    assert!(half > 0.8, "θ = 1/2 keeps {half:.3} of the swing");
     assert!(
         half > backward + 0.03,
         "θ = 1/2 keeps {half:.3}, θ = 1 {backward:.3}"
