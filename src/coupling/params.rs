@@ -67,9 +67,9 @@ pub enum BandVelocity {
     /// (J u)_f: the sheet velocity interpolated onto the face, whatever the
     /// face's distance from the sheet.
     Sheet,
-    /// (J u)_f plus the change of the liquid's velocity along the sheet
-    /// normal from each sheet particle to the face, read from the liquid
-    /// below the band one substep earlier ([`super::band_correction`]).
+    /// (J u)_f plus the change of the liquid's velocity from each sheet
+    /// particle to the face, with the whole velocity gradient read from the
+    /// liquid below the band one substep earlier ([`super::band_correction`]).
     #[default]
     Extrapolated,
 }
