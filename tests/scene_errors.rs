@@ -281,6 +281,9 @@ fn pipes_rim_modulation_and_coupling_settings_are_checked() {
     );
     let e = err(&format!("{GOOD}coupling:\n  mass_floor: 0\n"));
     check(&e, "coupling.mass_floor", 24, "[1e-4, 1]");
+    assert_eq!(s.coupling.tension_theta, 0.5);
+    let e = err(&format!("{GOOD}coupling:\n  tension_theta: 0.3\n"));
+    check(&e, "coupling.tension_theta", 24, "[0.5, 1], got 0.3");
     let e = err(&format!("{GOOD}coupling:\n  method: cg\n"));
     assert!(e.to_string().contains("unknown variant `cg`"), "{e}");
     assert_eq!(e.path(), "coupling.method", "{e}");

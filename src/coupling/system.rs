@@ -56,6 +56,13 @@ use rayon::prelude::*;
 /// ([`super::FaceMass::Balanced`]; `docs/decisions.md`, "The mass floor").
 pub const MASS_FLOOR: Real = 0.05;
 
+/// Default implicit weight θ of the sheet and filament tension
+/// (`coupling.tension_theta`): the force is σS L(xⁿ + θΔt uⁿ⁺¹). 1/2 is the
+/// smallest θ that stays stable at any Δt, and damps a capillary
+/// oscillation half as much as the paper's backward Euler (θ = 1;
+/// `docs/decisions.md`, "The tension's implicit weight").
+pub const TENSION_THETA: Real = 0.5;
+
 /// θ_f of constraint face `f`, at least [`Constraints::floor`] (both forms
 /// use the same, so that they solve the same equations).
 #[inline]

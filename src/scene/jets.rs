@@ -163,7 +163,7 @@ fn default_mass_floor() -> f64 {
 }
 
 fn default_tension_theta() -> f64 {
-    0.5
+    crate::coupling::system::TENSION_THETA
 }
 
 /// `coupling.band`.

@@ -62,7 +62,7 @@ impl DropletCase {
             mass_floor: crate::coupling::system::MASS_FLOOR,
             layer: LayerTension::Coupled,
             elongation: 0.0,
-            tension_theta: 0.5,
+            tension_theta: crate::coupling::system::TENSION_THETA,
         }
     }
 

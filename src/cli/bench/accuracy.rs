@@ -44,7 +44,7 @@ pub struct AccuracyArgs {
     #[arg(long, value_enum, default_value_t = LayerArg::Coupled)]
     layer: LayerArg,
     /// Implicit weight θ of the tension (`coupling.tension_theta`, [0.5, 1]).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = codimfx::coupling::system::TENSION_THETA)]
     tension_theta: Real,
     /// Run each case a whole period and print the swing ratio (the
     /// numerical damping: 1 without any, 0.991 for water at this size).
