@@ -47,7 +47,7 @@ pub fn band_correction(grid: &MacGrid, surf: &Surface, k: &Constraints) -> Vec<R
             let n: Vec3 = surf.axes[i].column(2).into();
             let (lo, hi) = (phi_at(&(x - d * n)), phi_at(&(x + d * n)));
             let (n, inner) = if lo <= hi { (n, lo) } else { (-n, hi) };
-            (inner < -0.5 * grid.dx).then(|| velocity_gradient(grid, &(x - d * n)))
+            (inner < -0.5 * grid.dx).then(|| grid.velocity_gradient(&(x - d * n)).1)
         })
         .collect();
     (0..k.len())
@@ -63,21 +63,6 @@ pub fn band_correction(grid: &MacGrid, surf: &Surface, k: &Constraints) -> Vec<R
                 .sum()
         })
         .collect()
-}
-
-/// ∇u_a (1/s) of the grid velocity at `p`, a = 0, 1, 2: the gradient of each
-/// component's trilinear interpolant.
-fn velocity_gradient(grid: &MacGrid, p: &Vec3) -> [Vec3; 3] {
-    let mut g = [Vec3::zeros(); 3];
-    for (a, ga) in g.iter_mut().enumerate() {
-        let (idx, _, gw) = grid.stencil_grad(a, p);
-        for (s, w) in idx.iter().zip(&gw) {
-            if *s != crate::grid::NONE {
-                *ga += w * grid.u[a][*s as usize];
-            }
-        }
-    }
-    g
 }
 
 /// Depth (× Δx) below a sheet particle at which [`band_correction`] reads

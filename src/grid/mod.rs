@@ -418,6 +418,25 @@ impl MacGrid {
         (idx, w, g)
     }
 
+    /// Grid velocity at `x` (m/s) and the gradient ∇u_a (1/s) of each
+    /// component's trilinear interpolant there, a = 0, 1, 2 (APIC's affine
+    /// rows; the band correction of the coupled solve).
+    #[inline]
+    pub fn velocity_gradient(&self, x: &Vec3) -> (Vec3, [Vec3; 3]) {
+        let (mut v, mut g) = (Vec3::zeros(), [Vec3::zeros(); 3]);
+        for a in 0..3 {
+            let (idx, w, gw) = self.stencil_grad(a, x);
+            for k in 0..8 {
+                if idx[k] != NONE {
+                    let u = self.u[a][idx[k] as usize];
+                    v[a] += w[k] * u;
+                    g[a] += gw[k] * u;
+                }
+            }
+        }
+        (v, g)
+    }
+
     /// Grid velocity at `x` (m/s).
     #[inline]
     pub fn velocity(&self, x: &Vec3) -> Vec3 {

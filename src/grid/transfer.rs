@@ -478,19 +478,7 @@ pub fn grid_to_particles_apic(grid: &MacGrid, parts: &mut Particles, affine: &mu
             if *cd != Codim::Volume {
                 return;
             }
-            for a in 0..3 {
-                let (idx, w, gw) = grid.stencil_grad(a, x);
-                let (mut va, mut ca) = (0.0, Vec3::zeros());
-                for k in 0..8 {
-                    if idx[k] != NONE {
-                        let u = grid.u[a][idx[k] as usize];
-                        va += w[k] * u;
-                        ca += gw[k] * u;
-                    }
-                }
-                v[a] = va;
-                c[a] = ca;
-            }
+            (*v, *c) = grid.velocity_gradient(x);
         });
 }
 
