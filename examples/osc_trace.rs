@@ -4,7 +4,8 @@
 //! Arguments (optional): R/Δx (4), Δt (0.01), elongation e (0.05).
 //! Environment: THETA (`coupling.tension_theta`), FLIP (`solver.flip`),
 //! APIC (APIC transfer), NOTRANS / NORESEED (no transitions / reseeding),
-//! LAYER=jump, BAND=sheet (`coupling.band: sheet`), SIGMA (σ in N/m), INITV=A (start from the potential flow
+//! LAYER=jump, BAND=sheet|extended (`coupling.band`), FIT=mean
+//! (`solver.velocity_fit: mean`), SIGMA (σ in N/m), INITV=A (start from the potential flow
 //! A(−x, 2y, −z) instead of rest; with SIGMA≈0 the kinetic energy should stay).
 use codimfx::math::Real;
 use codimfx::step::{step, StageTimes};
@@ -23,8 +24,10 @@ fn main() {
     if let Ok(t) = std::env::var("THETA") {
         case.tension_theta = t.parse().unwrap();
     }
-    if std::env::var("BAND").is_ok_and(|v| v == "sheet") {
-        case.band = codimfx::coupling::BandVelocity::Sheet;
+    match std::env::var("BAND").as_deref() {
+        Ok("sheet") => case.band = codimfx::coupling::BandVelocity::Sheet,
+        Ok("extended") => case.band = codimfx::coupling::BandVelocity::Extended,
+        _ => {}
     }
     if let Ok(sg) = std::env::var("SIGMA") {
         case.sigma = sg.parse().unwrap();
@@ -36,6 +39,9 @@ fn main() {
             let x = st.particles.x[i];
             st.particles.v[i] = codimfx::math::Vec3::new(-a * x.x, 2.0 * a * x.y, -a * x.z);
         }
+    }
+    if std::env::var("FIT").is_ok_and(|v| v == "linear") {
+        prm.velocity_fit = codimfx::grid::VelocityFit::Linear;
     }
     if let Ok(f) = std::env::var("FLIP") {
         prm.flip = f.parse().unwrap();

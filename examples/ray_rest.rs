@@ -2,7 +2,9 @@
 //! and interior pressure against 2σ/R, for both band velocities.
 //! Arguments (all optional): R/Δx, substeps, level-set radius (× Δx),
 //! `coupling.mass_floor`. `LAYER=jump` in the environment runs the
-//! surface layer's tension as a ghost-fluid jump (`coupling.layer: jump`).
+//! surface layer's tension as a ghost-fluid jump (`coupling.layer: jump`);
+//! `FIT=linear` sets `solver.velocity_fit: linear`, `FACE=balanced` the
+//! balanced face mass.
 use codimfx::coupling::BandVelocity;
 use codimfx::math::Real;
 use codimfx::step::{step, StageTimes};
@@ -14,11 +16,18 @@ fn main() {
     let sr: Option<Real> = std::env::args().nth(3).map(|s| s.parse().unwrap());
     let floor: Option<Real> = std::env::args().nth(4).map(|s| s.parse().unwrap());
     let jump = std::env::var("LAYER").is_ok_and(|v| v == "jump");
-    for band in [BandVelocity::Sheet, BandVelocity::Extrapolated] {
+    for band in [
+        BandVelocity::Sheet,
+        BandVelocity::Extrapolated,
+        BandVelocity::Extended,
+    ] {
         let mut case = DropletCase {
             band,
             ..DropletCase::paper(cells)
         };
+        if std::env::var("FACE").is_ok_and(|v| v == "balanced") {
+            case.face_mass = codimfx::coupling::FaceMass::Balanced;
+        }
         if jump {
             case.layer = codimfx::coupling::LayerTension::Jump;
         }
@@ -28,7 +37,11 @@ fn main() {
         if let Some(f) = floor {
             case.mass_floor = f;
         }
-        let (mut st, prm) = case.build().unwrap();
+        let (mut st, mut prm) = case.build().unwrap();
+        if std::env::var("FIT").is_ok_and(|v| v == "linear") {
+            prm.velocity_fit = codimfx::grid::VelocityFit::Linear;
+        }
+        let mut trace = Vec::new();
         let t = std::time::Instant::now();
         let (mut it, mut p, mut vmax) = (0usize, 0.0, 0.0);
         for k in 0..n {
@@ -39,7 +52,14 @@ fn main() {
                 p = c.interior_pressure;
             }
             vmax = st.particles.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+            if (k + 1) % 20 == 0 {
+                trace.push(format!("{vmax:.1e}"));
+            }
         }
+        println!(
+            "{band:?}: largest speed every 20 substeps {}",
+            trace.join(" ")
+        );
         println!(
             "{band:?}: R = {cells}Δx, first-step p/(2σ/R) − 1 = {:+.2} %, max speed after {n} steps {vmax:.3e} m/s, mean iterations {:.0}, wall {:.1} s",
             100.0 * (p / case.young_laplace() - 1.0),

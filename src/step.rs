@@ -107,6 +107,9 @@ pub struct StepParams {
     pub transfer: Transfer,
     /// FLIP fraction.
     pub flip: Real,
+    /// How P2G and the extrapolation read the particles near the surface
+    /// (`solver.velocity_fit`); the step sets it on the grid.
+    pub velocity_fit: crate::grid::VelocityFit,
     /// Level-set particle radius relative to Δx.
     pub surface_radius: Real,
     /// Keep separate liquid bodies apart on the grid (`solver.separate_bodies`).
@@ -143,6 +146,7 @@ impl StepParams {
             viscosity: s.physics.viscosity,
             transfer: s.solver.transfer,
             flip: s.solver.flip,
+            velocity_fit: s.solver.velocity_fit,
             surface_radius: s.solver.surface_radius,
             separate_bodies: s.solver.separate_bodies,
             open_gaps: s.solver.open_gaps,
@@ -219,6 +223,7 @@ pub fn coupling_params(s: &Scene) -> CouplingParams {
         band: match s.coupling.band {
             crate::scene::BandSetting::Sheet => coupling::BandVelocity::Sheet,
             crate::scene::BandSetting::Extrapolated => coupling::BandVelocity::Extrapolated,
+            crate::scene::BandSetting::Extended => coupling::BandVelocity::Extended,
         },
         surface_radius: s.solver.surface_radius,
         layer: s.coupling.layer,
@@ -395,6 +400,7 @@ pub fn step(
         warm,
         ..
     } = st;
+    grid.velocity_fit = p.velocity_fit;
     // 4: body force
     timed(times, "body_force", || {
         add_body_force(particles, p.accel, dt)

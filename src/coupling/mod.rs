@@ -44,7 +44,7 @@ use crate::math::{Real, Vec3};
 use crate::particles::Particles;
 use crate::solids::SolidSet;
 use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
-pub use band::{band_correction, BAND_PROBE};
+pub use band::{band_correction, band_extension, BAND_PROBE};
 pub use params::{
     BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Krylov, LayerTension,
     Method, GMRES_RESTART, MAX_OUTLIER_ROUNDS,
@@ -167,6 +167,21 @@ pub fn solve(
         info.jump_faces = air.len();
         full.set_air(grid, air);
     }
+    // the liquid's velocity at the constraint faces, from below the band
+    // (band::band_extension); u_old with it, so that FLIP carries to the
+    // volume particles only what the solve changes
+    if prm.band == BandVelocity::Extended {
+        let ext = band_extension(grid, &surf, &constrained);
+        for (f, &e) in ext.iter().enumerate() {
+            let (a, s) = constrained.faces[f];
+            if grid.weight[a][s] > 0.0 && !grid.is_prescribed(a, s) {
+                let du = e - grid.u[a][s];
+                full.shift_face_velocity(grid, a, s, du);
+                grid.u[a][s] = e;
+                grid.u_old[a][s] = e;
+            }
+        }
+    }
     // the velocity jump no substep makes physically (release::outlier_bound)
     let v_ref = grid
         .u
@@ -192,7 +207,7 @@ pub fn solve(
         let mut vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
         // K v = K (J u + c): in the face rows, v** − c takes the place of v**
         let band = match prm.band {
-            BandVelocity::Extrapolated => band_correction(grid, &surf, &k),
+            BandVelocity::Extrapolated | BandVelocity::Extended => band_correction(grid, &surf, &k),
             BandVelocity::Sheet => vec![0.0; k.len()],
         };
         for (v, c) in vstar.iter_mut().zip(&band) {

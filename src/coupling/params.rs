@@ -49,7 +49,11 @@ pub enum FaceMass {
     /// [`FaceMass::Sheet`] with the level set moved (by at most one volume
     /// particle spacing) so that the grid's face masses add up to the
     /// volume particles' mass: the coupled system's inertia is the
-    /// liquid's ([`super::faces::Constraints::set_mass_balanced`]).
+    /// liquid's ([`super::faces::Constraints::set_mass_balanced`]). With
+    /// P2G's mean (the default `solver.velocity_fit`) it also offsets part
+    /// of the mean's bias at the surface; with the linear fit the `sheet`
+    /// mass gives the better period (`docs/decisions.md`, "A linear
+    /// velocity at the free surface").
     #[default]
     Balanced,
     /// The liquid ends at the sheet layer: the fraction below a level set
@@ -72,6 +76,14 @@ pub enum BandVelocity {
     /// liquid below the band one substep earlier ([`super::band_correction`]).
     #[default]
     Extrapolated,
+    /// As [`Self::Extrapolated`], and the faces' velocity before the solve
+    /// (v**, the liquid's side of the constraint) extended linearly from
+    /// the same points below the band instead of P2G's
+    /// ([`super::band_extension`]). With P2G's mean it removed most of the
+    /// pure-inertia droplet's loss; with the linear fit it adds nothing to
+    /// it and lets the resting droplet's spurious currents grow to 2 mm/s
+    /// (`docs/decisions.md`, "A linear velocity at the free surface").
+    Extended,
 }
 
 /// How a volume's surface layer (sheet particles with a volume particle

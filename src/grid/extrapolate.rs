@@ -5,6 +5,12 @@
 //! the liquid, so the values are extended layer by layer: a face without a
 //! value takes the average of its valid 6-neighbours of the same component
 //! (Jacobi sweeps, so the result does not depend on the visiting order).
+//! With `solver.velocity_fit: linear` (the default) the first layer instead
+//! continues the velocity linearly, 2u_t − u_t' from the two valid faces t,
+//! t' behind it along an axis (averaged over the axes that have both), so
+//! that the faces just outside the liquid, which the free-surface cells'
+//! divergence reads, carry the flow's gradient; further layers stay
+//! constant, where a linear continuation would grow without bound.
 //! Faces inside static solids are then set to the extrapolated velocity minus
 //! its normal component (free slip, solid velocity 0; Bridson 2015 §4.3).
 
@@ -20,7 +26,8 @@ pub fn is_wall_face(g: &MacGrid, s: usize, a: usize) -> bool {
     !g.in_domain(s) || g.cell(s)[a] == 0
 }
 
-/// Extends `field` (component `a`) from its valid faces by `layers` layers.
+/// Extends `field` (component `a`) from its valid faces by `layers` layers
+/// (the first one linearly with [`super::VelocityFit::Linear`]).
 pub fn extrapolate_component(
     g: &MacGrid,
     field: &mut [Real],
@@ -28,12 +35,30 @@ pub fn extrapolate_component(
     a: usize,
     layers: usize,
 ) {
-    for _ in 0..layers {
+    let lin = g.velocity_fit == super::VelocityFit::Linear;
+    for layer in 0..layers {
         let upd: Vec<Option<Real>> = (0..field.len())
             .into_par_iter()
             .map(|s| {
                 if valid[s] != 0 || is_wall_face(g, s, a) {
                     return None;
+                }
+                if lin && layer < 2 {
+                    // 2u_t − u_t' along each axis where the two faces
+                    // behind s hold values
+                    let (mut sum, mut cnt) = (0.0, 0);
+                    for o in FACE_OFFSETS {
+                        let Some(t) = g.neighbor(s, o).filter(|&t| valid[t] != 0) else {
+                            continue;
+                        };
+                        if let Some(t2) = g.neighbor(t, o).filter(|&t2| valid[t2] != 0) {
+                            sum += 2.0 * field[t] - field[t2];
+                            cnt += 1;
+                        }
+                    }
+                    if cnt > 0 {
+                        return Some(sum / cnt as Real);
+                    }
                 }
                 let (mut sum, mut cnt) = (0.0, 0);
                 for o in FACE_OFFSETS {

@@ -85,6 +85,30 @@ pub struct MacGrid {
     /// per axis; empty when there are none. The projection keeps their
     /// velocity and counts their flux.
     pub prescribed: [Vec<bool>; 3],
+    /// How P2G and the extrapolation read the particles' velocity near the
+    /// free surface (`solver.velocity_fit`, set by the step from the scene).
+    pub velocity_fit: VelocityFit,
+}
+
+/// How the face velocities are formed where the particles around a face do
+/// not surround it (`solver.velocity_fit`; `docs/decisions.md`, "A linear
+/// velocity at the free surface").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityFit {
+    /// P2G fits a linear function of position to the particles' velocities
+    /// around each face (weighted least squares, the P2G weights) and takes
+    /// its value at the face; the first layer of extrapolated faces
+    /// continues the velocity linearly from the two faces behind it. A
+    /// linear flow is then read exactly at a face whose particles all lie
+    /// on one side of it.
+    Linear,
+    /// The weighted mean of the particles' velocities (Zhu & Bridson 2005)
+    /// and a constant extension: near the surface each face reads the
+    /// velocity at its particles' centroid, inside the liquid (default:
+    /// the linear fit injected energy in a dam break around a solid).
+    #[default]
+    Mean,
 }
 
 impl MacGrid {

@@ -281,6 +281,21 @@ impl Poisson {
         self.air = FaceValues::new(kept);
     }
 
+    /// Changes the right-hand side as if face `(a, s)`'s velocity in
+    /// `grid.u` had been larger by `du` when the system was built (the
+    /// face must be open and not prescribed).
+    pub fn shift_face_velocity(&mut self, g: &MacGrid, a: usize, s: usize, du: Real) {
+        if let Some(sd) = self.face(g, a, s) {
+            let w = g.weight[a][s];
+            if let Some(c) = sd.hi {
+                self.b[c as usize] += w * du;
+            }
+            if let Some(c) = sd.lo {
+                self.b[c as usize] -= w * du;
+            }
+        }
+    }
+
     /// Unknown of slot `s`, if its cell is liquid.
     #[inline]
     pub fn unknown(&self, s: usize) -> Option<u32> {

@@ -79,12 +79,96 @@ pub fn sort_particles(grid: &MacGrid, parts: &Particles) -> CellSort {
     CellSort { start, order }
 }
 
+/// Ridge ε (cells²) added to the offsets' covariance in P2G's linear fit
+/// ([`super::VelocityFit::Linear`]), so that directions the particles do
+/// not span (a thin sheet, a lone particle) keep the mean. The covariance
+/// along the normal of a flat surface through the face is about 1/18
+/// cells², 1/6 inside the liquid: ε shortens the gradient there by 2 % and
+/// 0.6 %. In the pure-inertia l = 2 droplet (R = 4Δx, 12 substeps) the
+/// kinetic energy kept was 0.976 with ε = 0.01, 0.990 with 0.003, 0.996
+/// with 0.001 and 0.999 with 0.0003.
+pub const LINEAR_RIDGE: Real = 0.001;
+
+/// A face takes its value from P2G's linear fit only if one particle
+/// weighs at least this much there (the product of its three hat weights);
+/// the faces that see particles only at the edge of their support are
+/// extrapolated instead (linearly, from the faces behind them). On a ball
+/// in a linear flow this took the faces' RMS error from 1.2 % to 0.25 % of
+/// the largest speed (`the_linear_fit_reads_a_linear_flow_at_the_free_surface`).
+pub const LINEAR_MIN_WEIGHT: Real = 0.1;
+
+/// Weighted moments of one face's particles for P2G's linear fit.
+#[derive(Clone, Copy, Default)]
+struct LinearMoments {
+    /// Σ w m d, Σ w m d dᵀ, Σ w m u d (d the particle's offset from the
+    /// face in cells, u its velocity component).
+    s1: Vec3,
+    s2: nalgebra::Matrix3<Real>,
+    t1: Vec3,
+    /// Largest single weight, and the range of the velocities.
+    wmax: Real,
+    lo: Real,
+    hi: Real,
+    n: usize,
+}
+
+impl LinearMoments {
+    fn add(&mut self, d: Vec3, w: Real, wm: Real, u: Real) {
+        self.s1 += d * wm;
+        self.s2 += d * d.transpose() * wm;
+        self.t1 += d * (wm * u);
+        self.wmax = self.wmax.max(w);
+        if self.n == 0 {
+            (self.lo, self.hi) = (u, u);
+        }
+        self.lo = self.lo.min(u);
+        self.hi = self.hi.max(u);
+        self.n += 1;
+    }
+
+    /// The fit's value at the face, from the weighted mean `mean` and the
+    /// total weight `den`. The step from the mean is limited to twice the
+    /// range of the particles' velocities, so that two close particles with
+    /// different velocities cannot throw the face's value far past them
+    /// (the ridge alone would let their difference grow up to
+    /// 1/(2√ε) ≈ 16-fold a cell away); on a ball in a linear flow the
+    /// limit never binds (with once the range it bound, and the faces' RMS
+    /// error rose from 0.25 % to 0.7 %).
+    fn value(&self, den: Real, mean: Real) -> Real {
+        let db = self.s1 / den;
+        let cov =
+            self.s2 / den - db * db.transpose() + nalgebra::Matrix3::identity() * LINEAR_RIDGE;
+        let cv = self.t1 / den - db * mean;
+        match cov.cholesky() {
+            Some(ch) => {
+                let step = -ch.solve(&cv).dot(&db);
+                let range = self.hi - self.lo;
+                mean + step.clamp(-2.0 * range, 2.0 * range)
+            }
+            None => mean,
+        }
+    }
+}
+
 /// Which faces received particle weight in P2G (1) and which did not (0).
 pub type Valid = [Vec<u8>; 3];
 
 /// Algorithm 1 step 5: particle velocities to the faces, and the liquid level
 /// set. With `affine` (APIC), particle p contributes `u_p,a + c_p,a · (x_f − x_p)`
 /// to face f of component a instead of `u_p,a`.
+///
+/// Without `affine`, `grid.velocity_fit` chooses how the contributions
+/// combine: [`super::VelocityFit::Mean`] takes their weighted mean ū;
+/// [`super::VelocityFit::Linear`] fits u(x) = ū + g · (x − x̄) by weighted
+/// least squares (x̄ the weighted mean offset of the particles from the
+/// face, in cells; g solves (C + εI) g = Σ w m (x_p − x̄)(u_p − ū) / Σ w m
+/// with C the offsets' weighted covariance and ε = [`LINEAR_RIDGE`]) and
+/// takes u(x_f) = ū − g · x̄. Where the particles surround the face, x̄ ≈ 0
+/// and the two agree; where they lie on one side (the free surface), the
+/// mean reads the velocity at their centroid, up to a cell inside the
+/// liquid, and the fit carries it to the face. The ridge keeps the fit to
+/// the mean along directions the particles do not span (a thin sheet, a
+/// lone particle).
 pub fn particles_to_grid(
     grid: &mut MacGrid,
     parts: &Particles,
@@ -98,6 +182,8 @@ pub fn particles_to_grid(
     let g: &MacGrid = grid;
     let inv_dx = 1.0 / g.dx;
     let r_ls = surface_radius * g.dx;
+    // APIC's particles carry their own gradient to the face
+    let linear = affine.is_none() && g.velocity_fit == super::VelocityFit::Linear;
     #[inline]
     fn hat(t: Real) -> Real {
         (1.0 - t.abs()).max(0.0)
@@ -120,6 +206,8 @@ pub fn particles_to_grid(
             let corner = Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real);
             let mut num = [0.0; 3];
             let mut den = [0.0; 3];
+            // the linear fit's moments per face (`VelocityFit::Linear`)
+            let mut fit = [LinearMoments::default(); 3];
             let mut d2min = Real::INFINITY;
             // body of the nearest volume particle (`body_labels`)
             let mut body = u32::MAX;
@@ -153,6 +241,12 @@ pub fn particles_to_grid(
                                     }
                                     num[a] += w[a] * m * va;
                                     den[a] += w[a] * m;
+                                    if linear {
+                                        // offset of the particle from the face (cells)
+                                        let mut d = r - Vec3::repeat(0.5);
+                                        d[a] = r[a];
+                                        fit[a].add(d, w[a], w[a] * m, va);
+                                    }
                                 }
                             }
                             let e = r - Vec3::repeat(0.5);
@@ -169,8 +263,15 @@ pub fn particles_to_grid(
             let mut u = [0.0; 3];
             let mut f = [0u8; 3];
             for a in 0..3 {
-                if den[a] > 0.0 && g.weight[a][s] > 0.0 {
-                    u[a] = num[a] / den[a];
+                if den[a] > 0.0
+                    && g.weight[a][s] > 0.0
+                    && (!linear || fit[a].wmax >= LINEAR_MIN_WEIGHT)
+                {
+                    u[a] = if linear {
+                        fit[a].value(den[a], num[a] / den[a])
+                    } else {
+                        num[a] / den[a]
+                    };
                     f[a] = 1;
                 }
             }

@@ -92,9 +92,13 @@ pub struct CouplingSettings {
     /// which reaches past it).
     #[serde(default)]
     pub face_mass: FaceMassSetting,
-    /// Velocity the constraint faces are held to: `extrapolated` (the
-    /// sheet's velocity plus the liquid's velocity change along the sheet
-    /// normal from the sheet to the face) or `sheet` (the sheet's own).
+    /// Velocity the constraint faces are held to, and the liquid's
+    /// velocity there before the solve: `extrapolated` (the sheet's
+    /// velocity plus the liquid's velocity change from the sheet to the
+    /// face; the faces' own velocity from P2G), `extended` (the same held
+    /// velocity; the faces' own velocity extended linearly from 2Δx inside
+    /// the liquid) or `sheet` (the sheet's own velocity, the faces' from
+    /// P2G).
     #[serde(default)]
     pub band: BandSetting,
     /// How a volume's surface layer carries its tension: `coupled` (eq. 24,
@@ -172,9 +176,12 @@ fn default_tension_theta() -> f64 {
 pub enum BandSetting {
     /// The sheet's interpolated velocity.
     Sheet,
-    /// Carried to the face with the sheet's velocity gradient (default).
+    /// Carried to the face with the liquid's velocity gradient (default).
     #[default]
     Extrapolated,
+    /// As `extrapolated`, and the faces' own velocity extended from inside
+    /// the liquid.
+    Extended,
 }
 
 fn default_face_fill() -> bool {

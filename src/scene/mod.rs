@@ -156,6 +156,12 @@ pub struct SolverSettings {
     /// (`grid::transfer::gap_cells`), so approaching surfaces meet.
     #[serde(default = "default_true")]
     pub open_gaps: bool,
+    /// How P2G and the velocity extrapolation read the particles near the
+    /// free surface: `linear` (a least-squares linear fit at each face and a
+    /// linear first layer of extrapolation) or `mean` (the weighted mean and
+    /// a constant extension).
+    #[serde(default)]
+    pub velocity_fit: crate::grid::VelocityFit,
 }
 
 /// Particle–grid velocity transfer scheme.
@@ -366,6 +372,7 @@ impl Default for SolverSettings {
             surface_radius: default_surface_radius(),
             separate_bodies: false,
             open_gaps: true,
+            velocity_fit: crate::grid::VelocityFit::Mean,
         }
     }
 }

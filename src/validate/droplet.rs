@@ -34,6 +34,8 @@ pub struct DropletCase {
     /// Coupled solve.
     pub method: Method,
     /// Mass of the constraint faces.
+    /// How P2G reads the particles at the surface (`solver.velocity_fit`).
+    pub velocity_fit: crate::grid::VelocityFit,
     pub face_mass: FaceMass,
     /// Velocity the constraint faces are held to.
     pub band: BandVelocity,
@@ -58,6 +60,7 @@ impl DropletCase {
             surface_radius: 1.0,
             method: Method::Monolithic,
             face_mass: FaceMass::Balanced,
+            velocity_fit: crate::grid::VelocityFit::Mean,
             band: BandVelocity::default(),
             mass_floor: crate::coupling::system::MASS_FLOOR,
             layer: LayerTension::Coupled,
@@ -107,6 +110,7 @@ impl DropletCase {
         }
         scene.physics.surface_tension = self.sigma;
         let mut prm = StepParams::from_scene(&scene);
+        prm.velocity_fit = self.velocity_fit;
         let mut cp = coupling_params(&scene);
         cp.method = self.method;
         cp.face_mass = self.face_mass;

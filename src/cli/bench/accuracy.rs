@@ -37,6 +37,9 @@ pub struct AccuracyArgs {
     /// Smallest mass fraction of a constraint face (`coupling.mass_floor`).
     #[arg(long, default_value_t = codimfx::coupling::system::MASS_FLOOR)]
     mass_floor: Real,
+    /// How P2G reads the particles at the surface (`solver.velocity_fit`).
+    #[arg(long, value_enum, default_value_t = FitArg::Mean)]
+    velocity_fit: FitArg,
     /// Solve the coupled system with λ eliminated (the Schur form).
     #[arg(long)]
     schur: bool,
@@ -85,13 +88,25 @@ impl From<LayerArg> for LayerTension {
     }
 }
 
+/// `--velocity-fit`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum FitArg {
+    /// The weighted mean.
+    Mean,
+    /// The weighted least-squares linear fit.
+    Linear,
+}
+
 /// `--band`.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 pub enum BandArg {
     /// The sheet's own velocity.
     Sheet,
-    /// Carried to the face with the sheet's velocity gradient.
+    /// Carried to the face with the liquid's velocity gradient.
     Extrapolated,
+    /// As `extrapolated`, and the faces' own velocity extended from inside
+    /// the liquid.
+    Extended,
 }
 
 /// Runs the benchmark and prints a markdown table.
@@ -104,8 +119,8 @@ pub fn run(a: AccuracyArgs) -> Result<()> {
     }
     println!("threads: {}\n", rayon::current_num_threads());
     println!(
-        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, mass floor {}, band {:?}, layer {:?}, tension θ {})\n",
-        a.surface_radius, a.face_mass, a.mass_floor, a.band, a.layer, a.tension_theta
+        "## l = 2 droplet oscillation (R = 0.0128 m, σ = 0.03 N/m, e = 0.05, surface radius {} Δx, face mass {:?}, mass floor {}, band {:?}, layer {:?}, tension θ {}, velocity fit {:?})\n",
+        a.surface_radius, a.face_mass, a.mass_floor, a.band, a.layer, a.tension_theta, a.velocity_fit
     );
     if a.damping {
         println!("| R/Δx | Δt (s) | particles | substeps | period (s) | Rayleigh (s) | error | swing ratio | wall (s) |");
@@ -130,11 +145,16 @@ pub fn run(a: AccuracyArgs) -> Result<()> {
                 band: match a.band {
                     BandArg::Sheet => BandVelocity::Sheet,
                     BandArg::Extrapolated => BandVelocity::Extrapolated,
+                    BandArg::Extended => BandVelocity::Extended,
                 },
                 method: if a.schur {
                     codimfx::coupling::Method::Schur
                 } else {
                     codimfx::coupling::Method::Monolithic
+                },
+                velocity_fit: match a.velocity_fit {
+                    FitArg::Mean => codimfx::grid::VelocityFit::Mean,
+                    FitArg::Linear => codimfx::grid::VelocityFit::Linear,
                 },
                 elongation: 0.05,
                 ..DropletCase::paper(cells)
