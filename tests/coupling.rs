@@ -367,7 +367,7 @@ fn a_droplet_in_pure_inertia_keeps_its_kinetic_energy_with_the_linear_fit() {
 #[test]
 fn l2_oscillation_period_with_the_linear_fit_is_within_two_percent_of_rayleigh_at_four_cells() {
     // `solver.velocity_fit: linear`, R = 4 Δx, e = 0.05, Δt = 0.01 s:
-    // measured −1.5 % (swing ratio 0.928 against 0.841 with the mean;
+    // measured −1.55 % (swing ratio 0.926 against 0.841 with the mean;
     // `codimfx bench accuracy --damping --velocity-fit linear`).
     let case = DropletCase {
         elongation: 0.05,

@@ -20,7 +20,7 @@
 //! neighbours ([`MacGrid::stencil_clamped`]), otherwise a particle resting
 //! next to a wall keeps a growing normal velocity that the grid never sees.
 
-use super::extrapolate::extrapolate;
+use super::extrapolate::extrapolate_p2g;
 use super::{MacGrid, FACE_OFFSETS, NONE};
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
@@ -457,7 +457,7 @@ pub fn transfer_to_grid(
         open_gaps,
         affine,
     );
-    extrapolate(grid, &mut valid, margin + 1);
+    extrapolate_p2g(grid, &mut valid, margin + 1);
     grid.u_old = grid.u.clone();
 }
 
