@@ -55,8 +55,8 @@ pub fn band_correction(grid: &MacGrid, surf: &Surface, k: &Constraints) -> Vec<R
 /// R = 4Δx the constraint faces' P2G values were 16 % below the flow's,
 /// while (J u)_f + c_f matched it within 0.1 %; the coupled solve then
 /// pulled the surface layer toward the biased faces, and the droplet lost
-/// ~1 % of its kinetic energy every substep (`docs/decisions.md`, "The
-/// band's own velocity").
+/// ~1 % of its kinetic energy every substep (`docs/decisions.md`, "A
+/// linear velocity at the free surface").
 pub fn band_extension(grid: &MacGrid, surf: &Surface, k: &Constraints) -> Vec<Real> {
     let probes = probes(grid, surf);
     face_sums(grid, k, |a, xf, i| {

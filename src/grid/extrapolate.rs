@@ -6,10 +6,11 @@
 //! value takes the average of its valid 6-neighbours of the same component
 //! (Jacobi sweeps, so the result does not depend on the visiting order).
 //! After P2G with `solver.velocity_fit: linear` ([`extrapolate_p2g`]) the
-//! first layer instead continues the velocity linearly, 2u_t − u_t' from
-//! the two valid faces t, t' behind it along an axis (averaged over the
-//! axes that have both), so that the faces just outside the liquid, which
-//! the free-surface cells' divergence reads, carry the flow's gradient;
+//! first two layers instead continue the velocity linearly, 2u_t − u_t'
+//! from the two valid faces t, t' behind each face along an axis (averaged
+//! over the axes that have both), so that the faces just outside the
+//! liquid, which the free-surface cells' divergence reads, carry the flow's
+//! gradient (on the droplets measured the second layer changed nothing);
 //! further layers stay constant, where a linear continuation would grow
 //! without bound. After the projection the extension is constant: the
 //! linear one there fed G2P's FLIP update with twice the difference of two
@@ -32,7 +33,7 @@ pub fn is_wall_face(g: &MacGrid, s: usize, a: usize) -> bool {
 }
 
 /// Extends `field` (component `a`) from its valid faces by `layers` layers
-/// (the first one linearly if `linear`).
+/// (the first two linearly if `linear`).
 pub fn extrapolate_component(
     g: &MacGrid,
     field: &mut [Real],
@@ -41,7 +42,6 @@ pub fn extrapolate_component(
     layers: usize,
     linear: bool,
 ) {
-    let lin = linear;
     for layer in 0..layers {
         let upd: Vec<Option<Real>> = (0..field.len())
             .into_par_iter()
@@ -49,7 +49,7 @@ pub fn extrapolate_component(
                 if valid[s] != 0 || is_wall_face(g, s, a) {
                     return None;
                 }
-                if lin && layer < 2 {
+                if linear && layer < LINEAR_LAYERS {
                     // 2u_t − u_t' along each axis where the two faces
                     // behind s hold values
                     let (mut sum, mut cnt) = (0.0, 0);
@@ -97,7 +97,11 @@ pub fn extrapolate(g: &mut MacGrid, valid: &mut Valid, layers: usize) {
     extend(g, valid, layers, false);
 }
 
-/// Extrapolates the velocities P2G gathered: the first layer linearly with
+/// Layers [`extrapolate_p2g`] continues linearly with
+/// [`super::VelocityFit::Linear`].
+pub const LINEAR_LAYERS: usize = 2;
+
+/// Extrapolates the velocities P2G gathered: [`LINEAR_LAYERS`] layers linearly with
 /// [`super::VelocityFit::Linear`], then constant layers.
 pub fn extrapolate_p2g(g: &mut MacGrid, valid: &mut Valid, layers: usize) {
     let linear = g.velocity_fit == super::VelocityFit::Linear;

@@ -98,8 +98,8 @@ pub struct MacGrid {
 pub enum VelocityFit {
     /// P2G fits a linear function of position to the particles' velocities
     /// around each face (weighted least squares, the P2G weights) and takes
-    /// its value at the face; the first layer of extrapolated faces
-    /// continues the velocity linearly from the two faces behind it. A
+    /// its value at the face; the first two layers of extrapolated faces
+    /// continue the velocity linearly from the two faces behind each. A
     /// linear flow is then read exactly at a face whose particles all lie
     /// on one side of it.
     Linear,

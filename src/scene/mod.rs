@@ -158,7 +158,7 @@ pub struct SolverSettings {
     pub open_gaps: bool,
     /// How P2G and the velocity extrapolation read the particles near the
     /// free surface: `linear` (a least-squares linear fit at each face and a
-    /// linear first layer of extrapolation) or `mean` (the weighted mean and
+    /// linear first two layers of extrapolation) or `mean` (the weighted mean and
     /// a constant extension).
     #[serde(default)]
     pub velocity_fit: crate::grid::VelocityFit,
