@@ -16,7 +16,7 @@
 //! surface particles carry none).
 
 use super::codim::Source;
-use crate::film::step::FittedShape;
+use crate::film::shape::FittedShape;
 use crate::math::{Mat3, Real, Vec3};
 use crate::mls::operators::{par_frames, Neighborhoods};
 use crate::mls::{MlsError, MlsParams};

@@ -12,7 +12,9 @@ pub mod air;
 pub mod catenoid;
 pub mod deformation;
 pub mod driver;
+pub mod shape;
 pub mod step;
+pub mod viscosity;
 pub mod weight;
 
 use crate::gas::GasPocket;

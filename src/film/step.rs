@@ -33,18 +33,18 @@ pub use super::advance::{advance_by, film_speed, motion_speed, step_with_retry};
 use super::air::{
     stage as air_stage, survey as air_survey, trapped_jet, Sheets, Survey as AirSurvey,
 };
+use super::shape::FittedShape;
+use super::viscosity::viscosity;
 use super::{weight, FilmError, FilmParams, FilmState, FilmStepInfo};
 use crate::coupling::surface::{particle_terms, SurfaceParams};
 use crate::gas::{enclosed_volume, fit_sphere, orient_normals, pressure_forces, wind_drag};
-use crate::linsolve::{bicgstab, Csr, Ilu0, SolveInfo};
 use crate::math::{Mat3, Real, Vec3};
-use crate::mls::operators::{fit_particle, par_frames, Neighborhoods};
+use crate::mls::operators::{par_frames, Neighborhoods};
 use crate::mls::{Frame, JointLaplacian, MlsParams};
 use crate::particles::{Codim, Particles};
-use crate::reseed::{reseed_guarded, LocalShape};
+use crate::reseed::reseed_guarded;
 use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 use crate::transition::{cone_census, update_codims};
-use faer::sparse::{SparseRowMat, Triplet};
 use rayon::prelude::*;
 use std::cmp::Ordering;
 use std::time::Instant;
@@ -53,47 +53,6 @@ use std::time::Instant;
 struct Kept {
     nb: Neighborhoods,
     frames: Vec<Frame>,
-}
-
-/// Local geometry of a joint particle for the reseeding, as the Taylor
-/// quadratic of its MLS fit (scaled coordinates η = ξ/h): slope and second
-/// derivatives at η = 0. Fitted on demand: only particles that propose a new
-/// particle need it (a few per step), so the reseeding no longer fits every
-/// particle (`docs/benchmarks.md`, "bench films").
-pub(crate) struct FittedShape<'a> {
-    pub(crate) nb: &'a Neighborhoods,
-    pub(crate) frames: &'a [Frame],
-    pub(crate) mls: &'a MlsParams,
-}
-
-impl FittedShape<'_> {
-    fn geo(&self, p: usize) -> Option<([Real; 2], [Real; 3])> {
-        fit_particle(self.nb, p, &self.frames[p], self.mls)
-            .fit()
-            .map(|f| (f.slope, f.second))
-    }
-}
-
-impl LocalShape for FittedShape<'_> {
-    fn height(&self, p: usize, u: Real, v: Real) -> Real {
-        let Some((s, d)) = self.geo(p) else {
-            return 0.0;
-        };
-        let h = self.mls.h;
-        let (a, b) = (u / h, v / h);
-        h * (s[0] * a + s[1] * b + 0.5 * (d[0] * a * a + 2.0 * d[1] * a * b + d[2] * b * b))
-    }
-    fn curve(&self, p: usize, u: Real) -> (Real, Real) {
-        let Some((s, d)) = self.geo(p) else {
-            return (0.0, 0.0);
-        };
-        let h = self.mls.h;
-        let a = u / h;
-        (
-            h * (s[0] * a + 0.5 * d[0] * a * a),
-            h * (s[1] * a + 0.5 * d[1] * a * a),
-        )
-    }
 }
 
 fn first_non_finite(p: &Particles) -> Option<u64> {
@@ -556,46 +515,5 @@ pub fn step(
     info.timings.tension = t.elapsed().as_secs_f64();
     *parts = join(others, film);
     check(parts, "surface tension")?;
-    Ok(info)
-}
-
-/// Implicit viscosity on the film particles: (M − μΔt V L) u = M u*.
-fn viscosity(
-    l: &SparseRowMat<usize, Real>,
-    film: &Particles,
-    u: &mut [Vec3],
-    prm: &FilmParams,
-    dt: Real,
-) -> Result<[SolveInfo; 3], FilmError> {
-    let err = |e| FilmError::Solve {
-        stage: "viscosity",
-        source: e,
-    };
-    let lc = Csr::from_faer(l.as_ref()).map_err(err)?;
-    let n = lc.nrows;
-    let mut t = Vec::with_capacity(lc.val.len() + n);
-    for i in 0..n {
-        t.push(Triplet::new(i, i, film.mass[i]));
-        if film.fixed[i] {
-            continue;
-        }
-        let c = prm.viscosity * dt * film.mass[i] / prm.density;
-        for k in lc.row_ptr[i]..lc.row_ptr[i + 1] {
-            t.push(Triplet::new(i, lc.col[k], -c * lc.val[k]));
-        }
-    }
-    let a = SparseRowMat::try_new_from_triplets(n, n, &t)
-        .map_err(|e| err(crate::linsolve::SolveError::Dimension(format!("{e:?}"))))?;
-    let ac = Csr::from_faer(a.as_ref()).map_err(err)?;
-    let ilu = Ilu0::new(&ac).map_err(err)?;
-    let mut info = [SolveInfo::default(); 3];
-    for d in 0..3 {
-        let b: Vec<Real> = (0..n).map(|i| film.mass[i] * u[i][d]).collect();
-        let mut x: Vec<Real> = u.iter().map(|v| v[d]).collect();
-        info[d] = bicgstab(&ac, &b, &mut x, &ilu, &prm.solver).map_err(err)?;
-        for i in 0..n {
-            u[i][d] = x[i];
-        }
-    }
     Ok(info)
 }
