@@ -105,10 +105,10 @@ pub enum VelocityFit {
     Linear,
     /// The weighted mean of the particles' velocities (Zhu & Bridson 2005)
     /// and a constant extension: near the surface each face reads the
-    /// velocity at its particles' centroid, inside the liquid (default;
-    /// `linear` has not yet been run through the whole test suite as the
-    /// default since its extension after the projection was made
-    /// constant).
+    /// velocity at its particles' centroid, inside the liquid (default:
+    /// with `linear` as the default the polygon's grid mode grew at its rim
+    /// and a dam break kept more of its splash; `docs/decisions.md`, "A
+    /// linear velocity at the free surface", session 35).
     #[default]
     Mean,
 }
