@@ -37,9 +37,9 @@ pub struct SlabArgs {
 
 /// Runs the slab case.
 pub fn slab(a: SlabArgs) -> Result<()> {
-    if !(a.cells >= 1.0 && (0.0..=1.0).contains(&a.offset)) {
+    if !(a.cells >= 0.25 && (0.0..=1.0).contains(&a.offset)) {
         anyhow::bail!(
-            "validate slab: --cells must be ≥ 1 and --offset in [0, 1] (got {} and {})",
+            "validate slab: --cells must be ≥ 0.25 and --offset in [0, 1] (got {} and {})",
             a.cells,
             a.offset
         );

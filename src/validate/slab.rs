@@ -11,7 +11,8 @@
 //! reaching it within a few t_c = √(ρh³/σ).
 //!
 //! The slab is sampled like the scenes' bodies (spacing Δx/2, the outer
-//! layer as sheet particles) and stepped with a fixed Δt by
+//! layer as sheet particles; a slab thinner than a cell as two layers of
+//! sheet particles h/2 apart, a sub-cell sheet) and stepped with a fixed Δt by
 //! [`crate::step::step`]. `offset` places its faces relative to the grid
 //! (the cell fraction of the lower face), since a slab a few cells thick
 //! sees the grid (docs/decisions.md, "Thick sheet edges").
@@ -61,6 +62,12 @@ impl SlabCase {
         }
     }
 
+    /// Particle spacing relative to Δx: Δx/2, or h/2 for a slab thinner
+    /// than a cell (two layers of sheet particles, a sub-cell sheet).
+    pub fn spacing(&self) -> Real {
+        (0.5 * self.cells).min(0.5)
+    }
+
     /// Thickness h (m).
     pub fn thickness(&self) -> Real {
         self.cells * self.dx
@@ -101,13 +108,14 @@ impl SlabCase {
              physics: {{gravity: [0,0,0], surface_tension: {s}}}\n\
              solver: {{surface_radius: {sr}}}\n\
              coupling: {{layer: {layer}}}\n\
-             bodies:\n  - {{kind: box, min: [{a},{b},{c}], max: [{d},{e},{f}], spacing: 0.5}}\n",
+             bodies:\n  - {{kind: box, min: [{a},{b},{c}], max: [{d},{e},{f}], spacing: {sp}}}\n",
             x = hi[0] + lo[0],
             y = hi[1] + lo[1],
             z = hi[2] + lo[2],
             dx = self.dx,
             s = self.sigma,
             sr = self.surface_radius,
+            sp = self.spacing(),
             layer = match self.layer {
                 LayerTension::Coupled => "coupled",
                 LayerTension::Jump => "jump",
