@@ -610,7 +610,9 @@ fn a_slab_edge_is_never_pulled_harder_than_its_line_tension() {
 /// √(2σ/ρh) = 0.294 m/s. Measured (session 35, `codimfx validate slab
 /// --cells 0.5`): momentum 1.06–1.17 × 2σL t and retraction 0.94–1.07 × v t
 /// from t = 0.02 s to 0.05 s (t_c = 5 ms). The bounds allow the first-step
-/// transient's excess (1.08–1.17) and 15 % on the distance.
+/// transient's excess (1.08–1.17) and 15 % on the distance. With no volume
+/// particle the slab has no constraint face: this checks eq. (24)'s particle
+/// block, its rims (filaments within five substeps) and the reseeding.
 #[test]
 fn a_sub_cell_sheet_edge_retracts_at_the_taylor_culick_speed() {
     use codimfx::validate::slab::{retract, SlabCase};
