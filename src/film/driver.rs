@@ -129,6 +129,18 @@ pub fn spacing(s: &Scene) -> Real {
         * s.domain.dx
 }
 
+/// The cache's frame vectors for any scene (`docs/cache-format.md`: the
+/// sheet normal for C = 1, the filament tangent for C = 2): [`frame_vectors`]
+/// with the MLS support `h`, or `None` (zeros in the cache) when no particle
+/// is a sheet or a filament. Liquid scenes wrote zeros until session 35, so
+/// the surfacer's disks of their sheets all faced +z.
+pub fn cache_frame_vectors(p: &Particles, h: Real) -> Option<Vec<Vec3>> {
+    p.codim
+        .iter()
+        .any(|c| matches!(c, Codim::Sheet | Codim::Filament))
+        .then(|| frame_vectors(p, h))
+}
+
 /// Cache frame vectors: b³ (normal) of sheet particles, b¹ (tangent) of
 /// filament particles, zero for the others.
 pub fn frame_vectors(p: &Particles, h: Real) -> Vec<Vec3> {
