@@ -44,7 +44,11 @@ fn a_liquid_cache_carries_the_sheet_normals() {
                 Codim::Volume | Codim::Point => assert_eq!(n.norm(), 0.0),
                 Codim::Sheet => {
                     sheets += 1;
-                    assert!((n.norm() - 1.0).abs() < 1e-9, "frame {f}: |n| = {}", n.norm());
+                    assert!(
+                        (n.norm() - 1.0).abs() < 1e-9,
+                        "frame {f}: |n| = {}",
+                        n.norm()
+                    );
                     let r = (p.x[i] - codimfx::Vec3::new(0.02, 0.02, 0.02)).normalize();
                     if n.dot(&r).abs() > 0.95 {
                         radial += 1;
