@@ -10,7 +10,6 @@ use super::{FilmParams, FilmState, Gust, Wind};
 use crate::gas::GasPocket;
 use crate::linsolve::BicgstabParams;
 use crate::math::{Real, Vec3};
-use crate::mls::operators::{par_frames, Neighborhoods};
 use crate::mls::MlsParams;
 use crate::particles::{Codim, Particles};
 use crate::scene::{FilmBody, Scene};
@@ -127,36 +126,6 @@ pub fn spacing(s: &Scene) -> Real {
         })
         .fold(1.0, Real::min)
         * s.domain.dx
-}
-
-/// The cache's frame vectors for any scene (`docs/cache-format.md`: the
-/// sheet normal for C = 1, the filament tangent for C = 2): [`frame_vectors`]
-/// with the MLS support `h`, or `None` (zeros in the cache) when no particle
-/// is a sheet or a filament. Liquid scenes wrote zeros until session 35, so
-/// the surfacer's disks of their sheets all faced +z.
-pub fn cache_frame_vectors(p: &Particles, h: Real) -> Option<Vec<Vec3>> {
-    p.codim
-        .iter()
-        .any(|c| matches!(c, Codim::Sheet | Codim::Filament))
-        .then(|| frame_vectors(p, h))
-}
-
-/// Cache frame vectors: b³ (normal) of sheet particles, b¹ (tangent) of
-/// filament particles, zero for the others.
-pub fn frame_vectors(p: &Particles, h: Real) -> Vec<Vec3> {
-    let mut out = vec![Vec3::zeros(); p.len()];
-    let Ok(nb) = Neighborhoods::build(&p.x, &p.codim, h) else {
-        return out;
-    };
-    let frames = par_frames(&nb, &MlsParams::new(h));
-    for (j, &i) in nb.store.iter().enumerate() {
-        out[i] = if p.codim[i] == Codim::Sheet {
-            frames[j].axis(2)
-        } else {
-            frames[j].axis(0)
-        };
-    }
-    out
 }
 
 /// Length of the next substep with `rem` seconds of the frame left: at

@@ -16,6 +16,7 @@
 //! exactly frame / fps) emits the same particles. The frame record counts
 //! them (`emitted`).
 
+mod frame_vectors;
 mod open;
 
 use crate::emitter::Jet;
@@ -372,7 +373,7 @@ impl Sim {
         let p = &self.state.particles;
         let affine =
             (self.params.transfer == Transfer::Apic).then_some(self.state.affine.as_slice());
-        let fv = film_driver::cache_frame_vectors(p, self.scene.domain.dx);
+        let fv = frame_vectors::frame_vectors(p, self.scene.domain.dx);
         let bytes = ply::encode(p, fv.as_deref(), affine, f, self.time)?;
         let path = self.dir.join(frame_name(f));
         write_atomic(&path, &bytes).map_err(io_err(&path))?;

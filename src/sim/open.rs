@@ -185,7 +185,7 @@ impl Sim {
             frames_written: 0,
             frames: Vec::new(),
         };
-        let fv = film_driver::cache_frame_vectors(&particles, d.dx);
+        let fv = super::frame_vectors::frame_vectors(&particles, d.dx);
         let bytes = ply::encode(&particles, fv.as_deref(), apic_zeros.as_deref(), 0, 0.0)?;
         let p0 = dir.join(frame_name(0));
         write_atomic(&p0, &bytes).map_err(io_err(&p0))?;

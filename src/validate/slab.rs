@@ -12,7 +12,7 @@
 //!
 //! The slab is sampled like the scenes' bodies (spacing Δx/2, the outer
 //! layer as sheet particles; a slab thinner than a cell as two layers of
-//! sheet particles h/2 apart, a sub-cell sheet) and stepped with a fixed Δt by
+//! sheet particles half its thickness apart, a sub-cell sheet) and stepped with a fixed Δt by
 //! [`crate::step::step`]. `offset` places its faces relative to the grid
 //! (the cell fraction of the lower face), since a slab a few cells thick
 //! sees the grid (docs/decisions.md, "Thick sheet edges").
@@ -62,8 +62,8 @@ impl SlabCase {
         }
     }
 
-    /// Particle spacing relative to Δx: Δx/2, or h/2 for a slab thinner
-    /// than a cell (two layers of sheet particles, a sub-cell sheet).
+    /// Particle spacing relative to Δx: Δx/2, or half the thickness for a
+    /// slab thinner than a cell (two layers of sheet particles, a sub-cell sheet).
     pub fn spacing(&self) -> Real {
         (0.5 * self.cells).min(0.5)
     }
