@@ -15,6 +15,7 @@
 //! The domain box is a closed container: faces on its boundary are closed
 //! (weight 0) by index range; other solids are cut cells ([`SolidSet`]).
 
+pub mod bodies;
 pub mod extrapolate;
 pub mod pcg;
 pub mod projection;

@@ -174,7 +174,7 @@ pub fn particles_to_grid(
     parts: &Particles,
     sort: &CellSort,
     surface_radius: Real,
-    labels: Option<&[u32]>,
+    separate_bodies: bool,
     open_gaps: bool,
     affine: Option<&[[Vec3; 3]]>,
 ) -> Valid {
@@ -190,17 +190,11 @@ pub fn particles_to_grid(
     }
     // one gather over the 27 cells around each slot gives its three lower
     // faces (weights relative to the slot's lower corner) and φ at its centre
-    let per_slot: Vec<([Real; 3], [u8; 3], Real, u32, Vec3)> = (0..ns)
+    let per_slot: Vec<([Real; 3], [u8; 3], Real, Vec3)> = (0..ns)
         .into_par_iter()
         .map(|s| {
             if !g.in_domain(s) {
-                return (
-                    [0.0; 3],
-                    [0; 3],
-                    g.dx,
-                    u32::MAX,
-                    Vec3::repeat(Real::INFINITY),
-                );
+                return ([0.0; 3], [0; 3], g.dx, Vec3::repeat(Real::INFINITY));
             }
             let c = g.cell(s);
             let corner = Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real);
@@ -209,8 +203,6 @@ pub fn particles_to_grid(
             // the linear fit's moments per face (`VelocityFit::Linear`)
             let mut fit = [LinearMoments::default(); 3];
             let mut d2min = Real::INFINITY;
-            // body of the nearest volume particle (`body_labels`)
-            let mut body = u32::MAX;
             // offset of the nearest particle from the centre (cells)
             let mut near = Vec3::repeat(Real::INFINITY);
             for dz in -1..=1isize {
@@ -254,7 +246,6 @@ pub fn particles_to_grid(
                             if d2 < d2min {
                                 d2min = d2;
                                 near = e;
-                                body = labels.map_or(u32::MAX, |l| l[p]);
                             }
                         }
                     }
@@ -275,7 +266,7 @@ pub fn particles_to_grid(
                     f[a] = 1;
                 }
             }
-            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx), body, near)
+            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx), near)
         })
         .collect();
     let mut valid: Valid = Default::default();
@@ -291,24 +282,13 @@ pub fn particles_to_grid(
             *p = 0.01 * g.dx;
         }
     };
-    if labels.is_some() {
-        // a liquid cell beside a liquid cell of another body is air: the two
-        // bodies stay apart on the grid until their particles meet
-        let body: Vec<u32> = per_slot.iter().map(|x| x.3).collect();
-        let gap: Vec<bool> = (0..ns)
-            .into_par_iter()
-            .map(|s| {
-                phi[s] < 0.0
-                    && FACE_OFFSETS.iter().any(|&o| {
-                        g.neighbor(s, o)
-                            .is_some_and(|t| phi[t] < 0.0 && body[t] != body[s])
-                    })
-            })
-            .collect();
+    let near: Vec<Vec3> = per_slot.iter().map(|x| x.3).collect();
+    if separate_bodies {
+        // liquid cells that the volume particles do not join stay apart
+        let gap = super::bodies::separated_cells(g, sort, parts, &phi, &near);
         make_air(&mut phi, &gap);
     }
     if open_gaps {
-        let near: Vec<Vec3> = per_slot.iter().map(|x| x.4).collect();
         let gap = gap_cells(g, sort, parts, &phi, &near);
         make_air(&mut phi, &gap);
     }
@@ -367,9 +347,9 @@ pub fn particles_to_grid(
 /// change (a cell outside one convex or flat surface has particles on one
 /// side only) and no liquid that holds particles is taken from the pressure
 /// solve. A gap narrower than about 1.7 Δx may have every cell centre within
-/// 0.35 Δx of a particle and stays joined. The rule needs no notion of
-/// bodies, so it also opens the gap above the point where two jets have
-/// joined, which `separate_bodies` cannot.
+/// 0.35 Δx of a particle and stays joined; `separate_bodies`
+/// ([`super::bodies`]) opens such gaps too, by asking whether the particles
+/// join the two sides near the face.
 pub fn gap_cells(
     g: &MacGrid,
     sort: &CellSort,
@@ -447,79 +427,17 @@ pub fn transfer_to_grid(
     grid.activate(&parts.x, margin);
     grid.compute_weights(solids);
     let sort = sort_particles(grid, parts);
-    let labels = separate_bodies.then(|| body_labels(parts, 0.5 * grid.dx));
     let mut valid = particles_to_grid(
         grid,
         parts,
         &sort,
         surface_radius,
-        labels.as_deref(),
+        separate_bodies,
         open_gaps,
         affine,
     );
     extrapolate_p2g(grid, &mut valid, margin + 1);
     grid.u_old = grid.u.clone();
-}
-
-/// Bodies of liquid: connected components of the volume particles, two
-/// particles joined when their cells of size `cell` touch (26-neighbours).
-/// Returns each particle's body (the smallest cell index of its component,
-/// so the labels depend on the input only), `u32::MAX` for other
-/// codimensions.
-pub fn body_labels(parts: &Particles, cell: Real) -> Vec<u32> {
-    let inv = 1.0 / cell;
-    let key = |x: &Vec3| -> [i64; 3] { [0, 1, 2].map(|a| (x[a] * inv).floor() as i64) };
-    let mut cells: Vec<[i64; 3]> = parts
-        .x
-        .iter()
-        .zip(&parts.codim)
-        .filter(|(_, c)| **c == Codim::Volume)
-        .map(|(x, _)| key(x))
-        .collect();
-    cells.par_sort_unstable();
-    cells.dedup();
-    let mut parent: Vec<u32> = (0..cells.len() as u32).collect();
-    fn find(parent: &mut [u32], mut i: u32) -> u32 {
-        while parent[i as usize] != i {
-            let g = parent[parent[i as usize] as usize];
-            parent[i as usize] = g;
-            i = g;
-        }
-        i
-    }
-    for i in 0..cells.len() {
-        let c = cells[i];
-        for d in 0..27i64 {
-            let o = [d / 9 - 1, d / 3 % 3 - 1, d % 3 - 1];
-            if o <= [0, 0, 0] {
-                continue;
-            }
-            let n = [c[0] + o[0], c[1] + o[1], c[2] + o[2]];
-            if let Ok(j) = cells.binary_search(&n) {
-                let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j as u32));
-                if a != b {
-                    parent[a.max(b) as usize] = a.min(b);
-                }
-            }
-        }
-    }
-    let root: Vec<u32> = (0..cells.len() as u32)
-        .map(|i| find(&mut parent, i))
-        .collect();
-    parts
-        .x
-        .par_iter()
-        .zip(parts.codim.par_iter())
-        .map(|(x, c)| {
-            if *c != Codim::Volume {
-                return u32::MAX;
-            }
-            let i = cells
-                .binary_search(&key(x))
-                .expect("every volume particle's cell is listed");
-            root[i]
-        })
-        .collect()
 }
 
 /// Algorithm 1 step 8: PIC/FLIP update of the codimension-0 particle velocities.

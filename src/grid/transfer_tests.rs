@@ -1,42 +1,6 @@
 //! Unit tests of [`crate::grid::transfer`] (kept apart to keep the module short).
 use super::*;
 
-#[test]
-fn bodies_are_components_of_touching_cells() {
-    // two 3³ lattices of spacing 0.25 (cell 0.5): with a gap of 1.0
-    // between them they are two bodies; with 0.01 (cells touching) one;
-    // a sheet particle belongs to none
-    let labels = |gap: Real| {
-        let mut p = Particles::default();
-        for x0 in [0.0, 0.5 + gap] {
-            for i in 0..3 {
-                for j in 0..3 {
-                    for k in 0..3 {
-                        let x =
-                            Vec3::new(x0 + 0.25 * i as Real, 0.25 * j as Real, 0.25 * k as Real);
-                        p.push(x, Vec3::zeros(), 1.0, 0.1, Codim::Volume);
-                    }
-                }
-            }
-        }
-        p.push(
-            Vec3::new(-1.0, 0.0, 0.0),
-            Vec3::zeros(),
-            1.0,
-            0.1,
-            Codim::Sheet,
-        );
-        body_labels(&p, 0.5)
-    };
-    let l = labels(1.0);
-    assert!(l[..27].iter().all(|&b| b == l[0]));
-    assert!(l[27..54].iter().all(|&b| b == l[27]));
-    assert_ne!(l[0], l[27]);
-    assert_eq!(l[54], u32::MAX);
-    let l = labels(0.01);
-    assert!(l[..54].iter().all(|&b| b == l[0]));
-}
-
 /// Liquid cells of two slabs of volume particles (spacing Δx/3) whose
 /// facing layers are `gap` apart, `second` false for the first slab alone:
 /// (φ < 0 per slot, cell centres).

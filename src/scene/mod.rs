@@ -147,9 +147,9 @@ pub struct SolverSettings {
     /// Radius of each particle's sphere in the liquid level set, relative to Δx.
     #[serde(default = "default_surface_radius")]
     pub surface_radius: f64,
-    /// Keep separate liquid bodies apart on the grid: a liquid cell next to
-    /// a liquid cell of another body is air until the bodies meet
-    /// (`grid::transfer::body_labels`).
+    /// Keep liquid surfaces that approach each other apart on the grid: both
+    /// cells of a face that the volume particles near it do not join are
+    /// air, until the particles meet (`grid::bodies`).
     #[serde(default)]
     pub separate_bodies: bool,
     /// Particle-free liquid cells between two liquid surfaces are air
