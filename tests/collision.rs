@@ -113,14 +113,16 @@ fn approaching_droplets_keep_their_momentum_with_open_gaps() {
 /// bodies then joined the gap on the axis: the left cube fell from 19.7 to
 /// 13.7 mm/s within frame 12, the facing sheet layers stopped 2.4–2.6 mm
 /// apart (beyond h = 2.08 mm, where the 1→0 rule cannot engulf them), and
-/// at frame 16 1,712 sheet particles were left within 4 mm of the contact
-/// plane and 8 mm of the axis, an inner film to the end of the run. The
-/// local rule (`grid::bodies`) keeps the gap on the axis open until the
-/// particles there meet: the cube keeps its speed through frame 14 and the
-/// facing layers join the volume (180 sheet particles left at frame 16).
+/// at frame 30 2,529 sheet particles were left within 4 mm of the contact
+/// plane and 9 mm of the axis, an inner film to the end of the run. A local
+/// rule that joined the faces' cells when the particles linked them
+/// anywhere within 2 Δx kept the gap around the bridge open (667). The rule
+/// of `grid::bodies` keeps the gap open until the particles meet across
+/// it: the cube keeps its speed through frame 14 and the facing layers join
+/// the volume (37 sheet particles left at frame 30).
 #[test]
 fn the_cubes_facing_layers_join_the_volume_instead_of_staying_an_inner_film() {
-    let (mut sim, _tmp) = open(1.0, 16, |t| t.to_string());
+    let (mut sim, _tmp) = open(1.0, 30, |t| t.to_string());
     let left = left_ids(&sim);
     let mut speed = Vec::new();
     sim.run(&std::sync::atomic::AtomicBool::new(false), |s, _| {
@@ -144,12 +146,12 @@ fn the_cubes_facing_layers_join_the_volume_instead_of_staying_an_inner_film() {
     let film = (0..p.len())
         .filter(|&i| {
             let d = p.x[i] - c;
-            p.codim[i] == Codim::Sheet && d.x.abs() < 0.004 && d.yz().norm() < 0.008
+            p.codim[i] == Codim::Sheet && d.x.abs() < 0.004 && d.yz().norm() < 0.009
         })
         .count();
-    eprintln!("sheet particles at the contact, frame 16: {film}");
+    eprintln!("sheet particles at the contact, frame 30: {film}");
     assert!(
-        film < 600,
+        film < 300,
         "{film} sheet particles left at the contact plane"
     );
 }
