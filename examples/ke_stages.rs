@@ -69,7 +69,6 @@ fn main() {
     if let Ok(f) = std::env::var("FLIP") {
         p.flip = f.parse().unwrap();
     }
-    st.grid.velocity_fit = p.velocity_fit;
     let k0 = ke(&st, true, false, false) + ke(&st, false, false, false);
     for s in 0..nsteps {
         let kv0 = ke(&st, true, false, false);
@@ -83,10 +82,7 @@ fn main() {
             &mut st.grid,
             &st.particles,
             &st.solids,
-            p.margin,
-            p.surface_radius,
-            p.separate_bodies,
-            p.open_gaps,
+            &p.p2g(),
             apic.then_some(aff.as_slice()),
         );
         let kvg0 = ke(&st, true, true, false);

@@ -29,7 +29,9 @@ use crate::film::step::step_with_retry;
 use crate::film::{FilmError, FilmParams, FilmState, FilmStepInfo};
 use crate::grid::pcg::{NotFinite, PcgParams, SolveInfo};
 use crate::grid::projection::{project_liquid, ProjectionInfo};
-use crate::grid::transfer::{grid_to_particles, grid_to_particles_apic, transfer_to_grid};
+use crate::grid::transfer::{
+    grid_to_particles, grid_to_particles_apic, transfer_to_grid, P2gSettings,
+};
 use crate::grid::viscosity::viscosity;
 use crate::grid::MacGrid;
 use crate::linsolve::BicgstabParams;
@@ -108,7 +110,7 @@ pub struct StepParams {
     /// FLIP fraction.
     pub flip: Real,
     /// How P2G and the extrapolation read the particles near the surface
-    /// (`solver.velocity_fit`); the step sets it on the grid.
+    /// (`solver.velocity_fit`).
     pub velocity_fit: crate::grid::VelocityFit,
     /// Level-set particle radius relative to Δx.
     pub surface_radius: Real,
@@ -137,6 +139,17 @@ pub struct StepParams {
 }
 
 impl StepParams {
+    /// The settings of step 5 (P2G).
+    pub fn p2g(&self) -> P2gSettings {
+        P2gSettings {
+            margin: self.margin,
+            surface_radius: self.surface_radius,
+            separate_bodies: self.separate_bodies,
+            open_gaps: self.open_gaps,
+            fit: self.velocity_fit,
+        }
+    }
+
     /// Parameters of a validated scene.
     pub fn from_scene(s: &Scene) -> StepParams {
         let a = s.acceleration();
@@ -400,7 +413,6 @@ pub fn step(
         warm,
         ..
     } = st;
-    grid.velocity_fit = p.velocity_fit;
     // 4: body force
     timed(times, "body_force", || {
         add_body_force(particles, p.accel, dt)
@@ -409,16 +421,7 @@ pub fn step(
     // 5: particles → grid
     timed(times, "p2g", || {
         let c = apic.then_some(affine.as_slice());
-        transfer_to_grid(
-            grid,
-            particles,
-            solids,
-            p.margin,
-            p.surface_radius,
-            p.separate_bodies,
-            p.open_gaps,
-            c,
-        )
+        transfer_to_grid(grid, particles, solids, &p.p2g(), c)
     });
     // 6: viscosity, grid part of eq. (13); the MLS part for C-1/C-2 joins here
     info.viscosity = if p.viscosity > 0.0 {

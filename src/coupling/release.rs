@@ -252,7 +252,7 @@ pub fn outlier_cells(
 pub(crate) mod tests {
     use super::super::faces::constraints;
     use super::*;
-    use crate::grid::transfer::transfer_to_grid;
+    use crate::grid::transfer::{transfer_to_grid, P2gSettings};
     use crate::particles::{Codim, Particles};
     use crate::solids::SolidSet;
 
@@ -272,7 +272,8 @@ pub(crate) mod tests {
             }
         }
         let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.4), dx);
-        transfer_to_grid(&mut g, &p, &SolidSet::default(), 2, 1.0, false, false, None);
+        let set = P2gSettings::plain(1.0);
+        transfer_to_grid(&mut g, &p, &SolidSet::default(), &set, None);
         let sys = Poisson::build(&g, &SolidSet::default(), |_, _| false);
         (g, sys)
     }

@@ -103,9 +103,8 @@ pub const LINEAR_LAYERS: usize = 2;
 
 /// Extrapolates the velocities P2G gathered: [`LINEAR_LAYERS`] layers linearly with
 /// [`super::VelocityFit::Linear`], then constant layers.
-pub fn extrapolate_p2g(g: &mut MacGrid, valid: &mut Valid, layers: usize) {
-    let linear = g.velocity_fit == super::VelocityFit::Linear;
-    extend(g, valid, layers, linear);
+pub fn extrapolate_p2g(g: &mut MacGrid, valid: &mut Valid, layers: usize, fit: super::VelocityFit) {
+    extend(g, valid, layers, fit == super::VelocityFit::Linear);
 }
 
 fn extend(g: &mut MacGrid, valid: &mut Valid, layers: usize, linear: bool) {

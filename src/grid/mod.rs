@@ -86,9 +86,6 @@ pub struct MacGrid {
     /// per axis; empty when there are none. The projection keeps their
     /// velocity and counts their flux.
     pub prescribed: [Vec<bool>; 3],
-    /// How P2G and the extrapolation read the particles' velocity near the
-    /// free surface (`solver.velocity_fit`, set by the step from the scene).
-    pub velocity_fit: VelocityFit,
 }
 
 /// How the face velocities are formed where the particles around a face do

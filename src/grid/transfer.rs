@@ -21,7 +21,7 @@
 //! next to a wall keeps a growing normal velocity that the grid never sees.
 
 use super::extrapolate::extrapolate_p2g;
-use super::{MacGrid, FACE_OFFSETS, NONE};
+use super::{MacGrid, VelocityFit, FACE_OFFSETS, NONE};
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
 use crate::solids::SolidSet;
@@ -153,11 +153,42 @@ impl LinearMoments {
 /// Which faces received particle weight in P2G (1) and which did not (0).
 pub type Valid = [Vec<u8>; 3];
 
+/// How P2G builds the grid (Algorithm 1 step 5), from the scene's `solver:`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct P2gSettings {
+    /// Blocks are allocated within this many cells of the particles, and
+    /// the velocities extended one layer further.
+    pub margin: usize,
+    /// Radius of each volume particle's sphere in the level set, relative
+    /// to Δx (`solver.surface_radius`).
+    pub surface_radius: Real,
+    /// `solver.separate_bodies` ([`super::bodies`]).
+    pub separate_bodies: bool,
+    /// `solver.open_gaps` ([`gap_cells`]).
+    pub open_gaps: bool,
+    /// `solver.velocity_fit`.
+    pub fit: VelocityFit,
+}
+
+impl P2gSettings {
+    /// Margin 2, level-set radius `surface_radius`, neither separation rule,
+    /// the weighted mean.
+    pub fn plain(surface_radius: Real) -> Self {
+        P2gSettings {
+            margin: 2,
+            surface_radius,
+            separate_bodies: false,
+            open_gaps: false,
+            fit: VelocityFit::Mean,
+        }
+    }
+}
+
 /// Algorithm 1 step 5: particle velocities to the faces, and the liquid level
 /// set. With `affine` (APIC), particle p contributes `u_p,a + c_p,a · (x_f − x_p)`
 /// to face f of component a instead of `u_p,a`.
 ///
-/// Without `affine`, `grid.velocity_fit` chooses how the contributions
+/// Without `affine`, `set.fit` chooses how the contributions
 /// combine: [`super::VelocityFit::Mean`] takes their weighted mean ū;
 /// [`super::VelocityFit::Linear`] fits u(x) = ū + g · (x − x̄) by weighted
 /// least squares (x̄ the weighted mean offset of the particles from the
@@ -173,17 +204,15 @@ pub fn particles_to_grid(
     grid: &mut MacGrid,
     parts: &Particles,
     sort: &CellSort,
-    surface_radius: Real,
-    separate_bodies: bool,
-    open_gaps: bool,
+    set: &P2gSettings,
     affine: Option<&[[Vec3; 3]]>,
 ) -> Valid {
     let ns = grid.slots();
     let g: &MacGrid = grid;
     let inv_dx = 1.0 / g.dx;
-    let r_ls = surface_radius * g.dx;
+    let r_ls = set.surface_radius * g.dx;
     // APIC's particles carry their own gradient to the face
-    let linear = affine.is_none() && g.velocity_fit == super::VelocityFit::Linear;
+    let linear = affine.is_none() && set.fit == VelocityFit::Linear;
     #[inline]
     fn hat(t: Real) -> Real {
         (1.0 - t.abs()).max(0.0)
@@ -283,12 +312,12 @@ pub fn particles_to_grid(
         }
     };
     let near: Vec<Vec3> = per_slot.iter().map(|x| x.3).collect();
-    if separate_bodies {
+    if set.separate_bodies {
         // liquid cells that the volume particles do not join stay apart
         let gap = super::bodies::separated_cells(g, sort, parts, &phi, &near);
         make_air(&mut phi, &gap);
     }
-    if open_gaps {
+    if set.open_gaps {
         let gap = gap_cells(g, sort, parts, &phi, &near);
         make_air(&mut phi, &gap);
     }
@@ -418,25 +447,14 @@ pub fn transfer_to_grid(
     grid: &mut MacGrid,
     parts: &Particles,
     solids: &SolidSet,
-    margin: usize,
-    surface_radius: Real,
-    separate_bodies: bool,
-    open_gaps: bool,
+    set: &P2gSettings,
     affine: Option<&[[Vec3; 3]]>,
 ) {
-    grid.activate(&parts.x, margin);
+    grid.activate(&parts.x, set.margin);
     grid.compute_weights(solids);
     let sort = sort_particles(grid, parts);
-    let mut valid = particles_to_grid(
-        grid,
-        parts,
-        &sort,
-        surface_radius,
-        separate_bodies,
-        open_gaps,
-        affine,
-    );
-    extrapolate_p2g(grid, &mut valid, margin + 1);
+    let mut valid = particles_to_grid(grid, parts, &sort, set, affine);
+    extrapolate_p2g(grid, &mut valid, set.margin + 1, set.fit);
     grid.u_old = grid.u.clone();
 }
 

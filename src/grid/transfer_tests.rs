@@ -24,16 +24,11 @@ fn slabs(gap: Real, second: bool, open_gaps: bool) -> (Vec<bool>, Vec<Vec3>) {
         slab(0.45 + gap, 0.75);
     }
     let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.0), dx);
-    transfer_to_grid(
-        &mut g,
-        &p,
-        &SolidSet::default(),
-        2,
-        1.0,
-        false,
+    let set = P2gSettings {
         open_gaps,
-        None,
-    );
+        ..P2gSettings::plain(1.0)
+    };
+    transfer_to_grid(&mut g, &p, &SolidSet::default(), &set, None);
     let liquid = (0..g.slots())
         .map(|t| g.in_domain(t) && g.phi[t] < 0.0)
         .collect();
@@ -110,8 +105,11 @@ fn linear_flow_errors(fit: crate::grid::VelocityFit) -> (Real, Real) {
         }
     }
     let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.0), dx);
-    g.velocity_fit = fit;
-    transfer_to_grid(&mut g, &p, &SolidSet::default(), 2, 1.0, false, false, None);
+    let set = P2gSettings {
+        fit,
+        ..P2gSettings::plain(1.0)
+    };
+    transfer_to_grid(&mut g, &p, &SolidSet::default(), &set, None);
     let (mut e2, mut emax, mut n) = (0.0, 0.0 as Real, 0);
     for t in 0..g.slots() {
         if !(g.in_domain(t) && g.phi[t] < 0.0) {
