@@ -34,7 +34,6 @@
 //! whether the particles join *across* the face.
 
 use super::projection::unit;
-use super::transfer::CellSort;
 use super::MacGrid;
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
@@ -116,23 +115,18 @@ impl Occupancy {
 /// The liquid cells that a separating face borders (see the module doc).
 /// `phi` is the level set (φ < 0 liquid), `near[s]` the offset of slot s's
 /// nearest volume particle from its centre in cells (∞ when none).
-pub fn separated_cells(
-    g: &MacGrid,
-    sort: &CellSort,
-    parts: &Particles,
-    phi: &[Real],
-    near: &[Vec3],
-) -> Vec<bool> {
+pub fn separated_cells(g: &MacGrid, parts: &Particles, phi: &[Real], near: &[Vec3]) -> Vec<bool> {
     let liquid = |s: usize| g.in_domain(s) && phi[s] < 0.0 && near[s].iter().all(|v| v.is_finite());
     let cells = (0..g.slots())
         .into_par_iter()
         .filter(|&s| liquid(s))
         .count();
-    let occ = Occupancy::new(
-        g,
-        parts,
-        sub_cells(sort.order.len() as Real / cells.max(1) as Real),
-    );
+    let volume = parts
+        .codim
+        .par_iter()
+        .filter(|c| **c == Codim::Volume)
+        .count();
+    let occ = Occupancy::new(g, parts, sub_cells(volume as Real / cells.max(1) as Real));
     let nearest = |s: usize| {
         let c = g.cell(s);
         Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real) + Vec3::repeat(0.5) + near[s]
@@ -259,7 +253,7 @@ mod tests {
                 }
             }
         }
-        let sep = separated_cells(&g, &sort, &parts, &phi, &near);
+        let sep = separated_cells(&g, &parts, &phi, &near);
         let row = |j: isize| {
             (0..22)
                 .filter(|&i| g.slot(i, j, 10).is_some_and(|s| sep[s]))

@@ -314,7 +314,7 @@ pub fn particles_to_grid(
     let near: Vec<Vec3> = per_slot.iter().map(|x| x.3).collect();
     if set.separate_bodies {
         // liquid cells that the volume particles do not join stay apart
-        let gap = super::bodies::separated_cells(g, sort, parts, &phi, &near);
+        let gap = super::bodies::separated_cells(g, parts, &phi, &near);
         make_air(&mut phi, &gap);
     }
     if set.open_gaps {
