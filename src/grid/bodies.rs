@@ -121,6 +121,9 @@ pub fn separated_cells(g: &MacGrid, parts: &Particles, phi: &[Real], near: &[Vec
         .into_par_iter()
         .filter(|&s| liquid(s))
         .count();
+    if cells == 0 {
+        return vec![false; g.slots()];
+    }
     let volume = parts
         .codim
         .par_iter()
@@ -277,5 +280,18 @@ mod tests {
         assert!(at.is_empty(), "row through the bridge: {at:?}");
         // one body without a gap opens nothing
         assert!(opened(0.0, 0.0).iter().all(|r| r.is_empty()));
+    }
+
+    #[test]
+    fn no_liquid_opens_nothing() {
+        let mut parts = Particles::default();
+        parts.push(Vec3::repeat(0.5), Vec3::zeros(), 1.0, 0.1, Codim::Sheet);
+        let mut g = MacGrid::new(Vec3::zeros(), Vec3::repeat(1.0), 0.1);
+        g.activate(&parts.x, 2);
+        let n = g.slots();
+        let near = vec![Vec3::repeat(Real::INFINITY); n];
+        let sep = separated_cells(&g, &parts, &vec![0.1; n], &near);
+        assert_eq!(sep.len(), n);
+        assert!(sep.iter().all(|s| !s));
     }
 }
