@@ -30,7 +30,7 @@
 //! local version joined the two cells when a chain of occupied sub-cells
 //! linked p and q anywhere within 2 Δx of the face: the bridge between the
 //! cubes then joined the gap's cells within 2 Δx of its edge, and the gap
-//! stayed open around a bridge of 8–9 mm radius to frame 100. The tube asks
+//! stayed open around a bridge of 9–10 mm radius to frame 100. The tube asks
 //! whether the particles join *across* the face.
 
 use super::projection::unit;
@@ -41,8 +41,8 @@ use rayon::prelude::*;
 
 /// Sub-cells per cell along an axis: about one volume particle per sub-cell
 /// inside the liquid, from the mean number of volume particles per liquid
-/// cell (`per_cell`), between 2 (Δx/2, the width of a gap that stays
-/// joined at most) and 4.
+/// cell (`per_cell`), between 2 and 4 (sub-cells Δx/2 to Δx/4 wide: the
+/// flood joins particles across a gap narrower than about one sub-cell).
 pub fn sub_cells(per_cell: Real) -> usize {
     (per_cell.max(0.0).cbrt().floor() as usize).clamp(2, 4)
 }
@@ -129,7 +129,7 @@ pub fn separated_cells(g: &MacGrid, parts: &Particles, phi: &[Real], near: &[Vec
         .par_iter()
         .filter(|c| **c == Codim::Volume)
         .count();
-    let occ = Occupancy::new(g, parts, sub_cells(volume as Real / cells.max(1) as Real));
+    let occ = Occupancy::new(g, parts, sub_cells(volume as Real / cells as Real));
     let nearest = |s: usize| {
         let c = g.cell(s);
         Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real) + Vec3::repeat(0.5) + near[s]
@@ -206,7 +206,6 @@ fn joined(occ: &Occupancy, p: Vec3, q: Vec3) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::particles::Codim;
 
     /// Two slabs of volume particles (spacing Δx/4) along x with their
     /// facing layers `gap` cells apart, joined by a bridge of the same
