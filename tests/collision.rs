@@ -4,27 +4,18 @@
 //! layers then join the volume instead of staying an inner film.
 
 use codimfx::particles::Codim;
-use codimfx::sim::{RunOptions, Sim};
+use codimfx::sim::Sim;
 use std::collections::BTreeSet;
 
-/// The preset's text, its path, and a run of it at resolution `scale` up to
-/// `frames`, with the text changed by `edit`.
+mod common;
+
+/// The preset at resolution `scale`, to run up to `frames`, its text changed
+/// by `edit`.
 fn open(scale: f64, frames: u32, edit: impl Fn(&str) -> String) -> (Sim, tempfile::TempDir) {
-    let tmp = tempfile::tempdir().unwrap();
-    let scene = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/droplet_collision.yaml"
-    ));
-    let text = std::fs::read_to_string(scene).unwrap();
-    assert!(text.contains("separate_bodies: true"), "preset changed");
-    let opt = RunOptions {
-        out_root: Some(tmp.path().to_path_buf()),
-        frames: Some(frames),
-        resume: false,
-        scale: Some(scale),
-        verbose: false,
-    };
-    (Sim::open_text(&edit(&text), scene, &opt).unwrap(), tmp)
+    common::open_preset("droplet_collision", frames, Some(scale), |t| {
+        assert!(t.contains("separate_bodies: true"), "preset changed");
+        edit(&t)
+    })
 }
 
 /// Ids of the left cube's particles (left of the mid-plane at the start).

@@ -311,7 +311,12 @@ pub fn particles_to_grid(
             *p = 0.01 * g.dx;
         }
     };
-    let near: Vec<Vec3> = per_slot.iter().map(|x| x.3).collect();
+    // each slot's nearest volume particle, for the separation rules
+    let near: Vec<Vec3> = if set.separate_bodies || set.open_gaps {
+        per_slot.iter().map(|x| x.3).collect()
+    } else {
+        Vec::new()
+    };
     if set.separate_bodies {
         // liquid cells that the volume particles do not join stay apart
         let gap = super::bodies::separated_cells(g, parts, &phi, &near);
