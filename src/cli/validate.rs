@@ -98,6 +98,8 @@ enum Case {
     Catenoid(super::validate_films::CatenoidArgs),
     /// A free liquid slab's edge against the 2σ-per-length pull of Taylor–Culick retraction.
     Slab(super::validate_liquid::SlabArgs),
+    /// A box's long edges against Keller & Miksis's self-similar recoil of a liquid wedge.
+    Wedge(super::validate_liquid::WedgeArgs),
 }
 
 /// Flags of `validate sphere-diffusion`.
@@ -188,6 +190,7 @@ pub fn run(a: ValidateArgs) -> Result<()> {
         Case::SphereDeformation(d) => super::validate_films::deformation(d),
         Case::Catenoid(c) => super::validate_films::catenoid(c),
         Case::Slab(s) => super::validate_liquid::slab(s),
+        Case::Wedge(w) => super::validate_liquid::wedge(w),
     }
 }
 

@@ -8,8 +8,9 @@
 //! * [`butterfly`]: implicit diffusion on a sheet wing with filament rim and
 //!   tails (joint operator, Fig. 12): heat drift and the maximum principle.
 //!
-//! [`droplet`] and [`slab`] are cases of the coupled solver: a droplet's
-//! Young–Laplace jump and l = 2 period, a free slab's edge pull.
+//! [`droplet`], [`slab`] and [`wedge`] are cases of the coupled solver: a
+//! droplet's Young–Laplace jump and l = 2 period, a free slab's edge pull,
+//! a box edge's capillary recoil.
 //!
 //! [`sampling`] builds the point sets, [`time`] the integrators.
 
@@ -20,6 +21,7 @@ pub mod sampling;
 pub mod slab;
 pub mod sphere_diffusion;
 pub mod time;
+pub mod wedge;
 
 use crate::math::Real;
 use crate::mls::MlsError;
