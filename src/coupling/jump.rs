@@ -253,7 +253,7 @@ pub fn air_values(
 }
 
 /// The explicit jump's capillary substep limit √(⟨ρ⟩Δx³/(2πσ)) (Brackbill,
-/// Kothe & Zemach 1992, eq. 61) for a scene with `coupling.layer: jump` and
+/// Kothe & Zemach 1992) for a scene with `coupling.layer: jump` and
 /// σ > 0; infinite otherwise (eq. 24's tension is semi-implicit). ⟨ρ⟩ is
 /// the mean density of the two sides, ρ/2 for a liquid in air (the air's
 /// density is neglected): a free surface's shortest capillary wave, k =
