@@ -27,6 +27,28 @@ use crate::math::Real;
 use crate::mls::MlsError;
 use thiserror::Error;
 
+/// A liquid case's scene from its YAML text (`name` for error messages),
+/// its bodies sampled into the state the step works on, and the step's
+/// parameters ([`slab`], [`wedge`]).
+pub fn liquid_case(
+    yaml: &str,
+    name: &str,
+) -> Result<
+    (
+        crate::step::SimState,
+        crate::step::StepParams,
+        crate::scene::Scene,
+    ),
+    crate::scene::SceneError,
+> {
+    let scene = crate::scene::load_str(yaml, std::path::Path::new(name))?;
+    let solids = crate::solids::SolidSet::from_scene(&scene.solids);
+    let (parts, _) = crate::scene::sample_bodies(&scene, &solids);
+    let prm = crate::step::StepParams::from_scene(&scene);
+    let grid = crate::grid::MacGrid::new(prm.lo, prm.hi, scene.domain.dx);
+    Ok((crate::step::SimState::new(parts, grid, solids), prm, scene))
+}
+
 /// Errors of a validation case.
 #[derive(Debug, Error)]
 pub enum ValidateError {

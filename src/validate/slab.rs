@@ -18,10 +18,8 @@
 //! sees the grid (docs/decisions.md, "Thick sheet edges").
 
 use crate::coupling::LayerTension;
-use crate::grid::MacGrid;
 use crate::math::Real;
-use crate::scene::{load_str, sample_bodies, SceneError};
-use crate::solids::SolidSet;
+use crate::scene::SceneError;
 use crate::step::{step, SimState, StageTimes, StepError, StepParams};
 use std::time::Instant;
 
@@ -127,12 +125,8 @@ impl SlabCase {
             e = hi[1],
             f = hi[2],
         );
-        let scene = load_str(&yaml, std::path::Path::new("slab.yaml"))?;
-        let solids = SolidSet::from_scene(&scene.solids);
-        let (parts, _) = sample_bodies(&scene, &solids);
-        let prm = StepParams::from_scene(&scene);
-        let grid = MacGrid::new(prm.lo, prm.hi, self.dx);
-        Ok((SimState::new(parts, grid, solids), prm))
+        let (state, prm, _) = super::liquid_case(&yaml, "slab.yaml")?;
+        Ok((state, prm))
     }
 }
 

@@ -21,11 +21,9 @@
 //! coupled layer holds a body's edges".
 
 use crate::coupling::LayerTension;
-use crate::grid::MacGrid;
 use crate::math::{Real, Vec3};
 use crate::particles::{Codim, Particles};
-use crate::scene::{load_str, sample_bodies, SceneError};
-use crate::solids::SolidSet;
+use crate::scene::SceneError;
 use crate::step::{step, SimState, StageTimes, StepError, StepParams};
 use std::time::Instant;
 
@@ -71,12 +69,7 @@ impl WedgeCase {
                 LayerTension::Jump => "jump",
             },
         );
-        let scene = load_str(&yaml, std::path::Path::new("wedge.yaml"))?;
-        let solids = SolidSet::from_scene(&scene.solids);
-        let (parts, _) = sample_bodies(&scene, &solids);
-        let prm = StepParams::from_scene(&scene);
-        let grid = MacGrid::new(prm.lo, prm.hi, scene.domain.dx);
-        Ok((SimState::new(parts, grid, solids), prm, scene))
+        super::liquid_case(&yaml, "wedge.yaml")
     }
 }
 
