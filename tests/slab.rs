@@ -89,3 +89,37 @@ fn the_layer_jump_frees_a_thick_sheet_edge() {
         }
     }
 }
+
+/// With the cut layer (`coupling.layer: cut`, src/coupling/cut.rs) the
+/// liquid ends at the layer and no continuity row holds the sheet's area,
+/// so even a thin sheet of liquid, 1.5–2 cells, has its edge pulled: the
+/// thin features that neither the coupled layer nor the jump frees (the
+/// jump: 0.27 / 0.19 at 1.5 cells, 0.02 / 0.08 at 2 cells, t = 0.05 s,
+/// session 37). Measured (session 38) at t = 0.05 s, offsets 0 / 0.5:
+/// 0.55 / 0.59 at 1.5 cells, 0.78 / 0.68 at 2 cells (0.83 / 0.79 at 3).
+#[test]
+fn the_cut_layer_frees_a_thin_sheet_edge() {
+    use codimfx::validate::slab::{retract, SlabCase};
+    for cells in [1.5, 2.0] {
+        for offset in [0.0, 0.5] {
+            let case = SlabCase {
+                cells,
+                offset,
+                layer: codimfx::coupling::LayerTension::Cut,
+                ..SlabCase::chain()
+            };
+            let (samples, _) = retract(&case, 0.0025, 0.05, 4).unwrap();
+            assert_eq!(samples.len(), 5);
+            for s in &samples {
+                assert_pull(
+                    s,
+                    f64::NEG_INFINITY,
+                    1.1,
+                    &format!("{cells} cells, offset {offset}"),
+                );
+            }
+            let last = samples.last().unwrap();
+            assert_pull(last, 0.5, 1.1, &format!("{cells} cells, offset {offset}"));
+        }
+    }
+}

@@ -13,7 +13,10 @@
 //!   incomplete LU, at the scene's tolerance (paper: 1e-9);
 //! - [`jump`]: with `coupling.layer: jump`, a volume's surface layer gives
 //!   the grid a ghost-fluid pressure jump σκ instead of tension rows and
-//!   constraint faces (free sheets and filaments keep eq. 24).
+//!   constraint faces (free sheets and filaments keep eq. 24);
+//! - [`cut`]: with `coupling.layer: cut`, the liquid ends at a volume's
+//!   surface layer, whose particles close the cells it crosses (their
+//!   normal flux in the cells' continuity, the cells' pressure on them).
 //!
 //! Both methods give the same face velocities, pressures and particle
 //! velocities up to the solver tolerance; the reduced one is smaller (no λ
@@ -24,6 +27,7 @@
 
 pub mod band;
 pub mod codim;
+pub mod cut;
 pub mod faces;
 pub mod jump;
 pub mod params;
@@ -100,14 +104,49 @@ pub fn solve(
     info.fits = surf.fits;
     let t = Instant::now();
     let sheets = &surf.nb.x[..surf.n_sheet()];
-    let constrains = |i: usize| points.as_ref().is_none_or(|p| p[i].is_none());
+    let cut_mode = prm.layer == LayerTension::Cut;
+    let constrains = |i: usize| {
+        if cut_mode {
+            !surf.attached[i]
+        } else {
+            points.as_ref().is_none_or(|p| p[i].is_none())
+        }
+    };
+    // with the cut layer: ψ zero half a spacing inside the layer
+    let cut = (cut_mode && spacing.is_some()).then(|| {
+        let shift = prm.surface_radius * grid.dx - 0.5 * spacing.unwrap_or(0.0);
+        cut::Cut::build(
+            grid,
+            solids,
+            &surf,
+            prm.surface.mls.h,
+            shift,
+            spacing.unwrap_or(0.0),
+        )
+    });
+    if cut.is_some() {
+        // the liquid up to the cut carries the body's mass
+        let f = cut::LAYER_INERTIA;
+        for (m, a) in surf.mass.iter_mut().zip(&surf.attached) {
+            if *a {
+                *m *= f;
+            }
+        }
+    }
+    if let Some(c) = &cut {
+        info.cut_cells = c.cut_cells;
+        info.cut_free_cells = c.free_cells;
+    }
     // the grid's system and K, and beside them the particles' order in the
     // coupled system (it needs only the Laplacian's pattern)
     let ((full, constrained, released, shift), order) = {
         let grid = &*grid;
         rayon::join(
             || {
-                let full = Poisson::build(grid, solids, |_, _| false);
+                let full = match &cut {
+                    Some(c) => c.poisson(grid, |_, _| false),
+                    None => Poisson::build(grid, solids, |_, _| false),
+                };
                 // K after the pre-solve release, with the face masses of
                 // eq. (19) (per face, so releasing more faces later leaves
                 // the others' as they are)
@@ -119,6 +158,9 @@ pub fn solve(
                     let shift = prm.surface_radius * grid.dx - 0.5 * s;
                     match prm.face_mass {
                         FaceMass::Sheet => constrained.set_mass(grid, &full, shift),
+                        // (with the cut layer the faces' mass has no volume to
+                        // balance when none is constrained)
+                        FaceMass::Balanced if cut.is_some() && constrained.is_empty() => {}
                         FaceMass::Balanced => {
                             let target = 3.0 * totals.0 / (prm.surface.density * grid.dx.powi(3));
                             let (d, bounded) =
@@ -201,8 +243,21 @@ pub fn solve(
             info.released_faces += k.release_weak(grid, &full);
         }
         info.faces = k.len();
-        if k.is_empty() {
-            return solve_uncoupled(grid, solids, parts, prm, dt, layers, &surf, &full, info, t);
+        let cut_rows = cut.as_ref().map_or(Vec::new(), |c| c.coupling(&full));
+        if k.is_empty() && cut_rows.is_empty() {
+            return solve_uncoupled(
+                grid,
+                solids,
+                parts,
+                prm,
+                dt,
+                layers,
+                &surf,
+                &full,
+                cut.as_ref(),
+                info,
+                t,
+            );
         }
         let mut vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
         // K v = K (J u + c): in the face rows, v** − c takes the place of v**
@@ -214,13 +269,15 @@ pub fn solve(
             *v -= c;
         }
         // the chosen method; if its solve fails, the other one (counted)
-        let order = match prm.method {
-            Method::Monolithic => [Form::Monolithic, Form::Reduced],
-            Method::Schur => [Form::Reduced, Form::Monolithic],
+        // (the cut layer's rows are built for the reduced form only)
+        let order: &[Form] = match prm.method {
+            _ if cut.is_some() => &[Form::Reduced],
+            Method::Monolithic => &[Form::Monolithic, Form::Reduced],
+            Method::Schur => &[Form::Reduced, Form::Monolithic],
         };
         let mut attempt = None;
         let mut failed = None;
-        for (n, form) in order.into_iter().enumerate() {
+        for (n, &form) in order.iter().enumerate() {
             let t = if n == 0 && around.is_empty() && !weak {
                 t
             } else {
@@ -241,12 +298,13 @@ pub fn solve(
                 t,
                 warm.as_ref(),
                 porder.as_ref(),
+                cut.as_ref(),
             ) {
                 Ok(r) => {
                     attempt = Some(r);
                     break;
                 }
-                Err(e) if n == 0 => {
+                Err(e) if n + 1 < order.len() => {
                     info.method_fallbacks += 1;
                     info.first_failure = Some(e.to_string());
                 }
@@ -260,6 +318,9 @@ pub fn solve(
                 weak = true;
                 info.outlier_rounds += 1;
                 continue;
+            }
+            if order.len() == 1 {
+                return Err(e);
             }
             return Err(CouplingError::BothFailed {
                 first: info.first_failure.take().unwrap_or_default(),
@@ -305,14 +366,18 @@ pub fn solve(
         .map(|f| ju[f] - vstar[f] + gq[f] / k.sides[f].theta)
         .collect();
     info.interior_pressure = interior_pressure(&full, q, grid.dx, sc);
-    if prm.verify {
+    if prm.verify && cut.is_none() {
         // μ_f = θ_f ((J u)_f − v**_f) + (Gq)_f from the face rows
         let mu: Vec<Real> = (0..k.len())
             .map(|f| system::mono_theta(&k, f) * (ju[f] - vstar[f]) + gq[f])
             .collect();
         info.eq24_residual = Some(eq24_residual(&full, &surf, &k, &vstar, sc, q, &u, &mu)?);
     }
-    let mut valid = full.apply(grid, q, |a, s| k.index(a, s).map_or(0.0, |f| dv[f]));
+    let extra = |a, s| k.index(a, s).map_or(0.0, |f| dv[f]);
+    let mut valid = match &cut {
+        Some(c) => c.apply(grid, &full, q, |a, s| k.index(a, s).is_some(), extra),
+        None => full.apply(grid, q, extra),
+    };
     extrapolate(grid, &mut valid, layers);
     constrain_solids(grid, solids);
     // the surface layer of a volume moves with the liquid it bounds: its
@@ -341,6 +406,7 @@ fn solve_uncoupled(
     layers: usize,
     surf: &surface::Surface,
     full: &Poisson,
+    cut: Option<&cut::Cut>,
     mut info: CouplingInfo,
     t: Instant,
 ) -> Result<CouplingInfo, CouplingError> {
@@ -365,7 +431,10 @@ fn solve_uncoupled(
             theta: prm.surface.tension_theta,
         },
     );
-    let mut valid = full.apply(grid, &q, |_, _| 0.0);
+    let mut valid = match cut {
+        Some(c) => c.apply(grid, full, &q, |_, _| false, |_, _| 0.0),
+        None => full.apply(grid, &q, |_, _| 0.0),
+    };
     extrapolate(grid, &mut valid, layers);
     constrain_solids(grid, solids);
     if !surf.is_empty() {
@@ -395,7 +464,7 @@ fn solve_uncoupled(
             .iter()
             .fold(info.rel_residual, |m, s| m.max(s.rel_residual));
         let mut u = sol.u;
-        if prm.layer == LayerTension::Jump {
+        if prm.layer != LayerTension::Coupled {
             // the surface layer moves with the liquid it bounds
             for (i, &s) in surf.nb.store.iter().enumerate() {
                 if surf.attached[i] {
@@ -461,17 +530,24 @@ fn solve_form(
     t: Instant,
     warm: Option<&WarmStart>,
     order: Option<&system::ParticleOrder>,
+    cut: Option<&cut::Cut>,
 ) -> Result<(system::Assembled, Vec<Real>, WarmStart), CouplingError> {
     let reduced = (form == Form::Reduced).then(|| {
-        let mut r = Poisson::build(grid, solids, |a, s| k.index(a, s).is_some());
+        let skip = |a, s| k.index(a, s).is_some();
+        let mut r = match cut {
+            Some(c) => c.poisson(grid, skip),
+            None => Poisson::build(grid, solids, skip),
+        };
         if !full.air.is_empty() {
             r.set_air(grid, full.air.clone());
         }
         r
     });
+    let pois = reduced.as_ref().unwrap_or(full);
+    let cut_rows = cut.map_or(Vec::new(), |c| c.coupling(pois));
     let sys = assemble(
         form,
-        reduced.as_ref().unwrap_or(full),
+        pois,
         surf,
         k,
         vstar,
@@ -481,6 +557,7 @@ fn solve_form(
         prm.face_fill,
         prm.shared_block,
         order,
+        &cut_rows,
     )
     .map_err(solve_err("coupled system assembly"))?;
     let view = match &sys.matrix {

@@ -99,6 +99,11 @@ pub enum LayerTension {
     /// from the layer's MLS curvature ([`super::jump`]); the layer then
     /// constrains no face, free sheets and filaments keep eq. (24).
     Jump,
+    /// The liquid ends at the layer, whose particles close the cells it
+    /// crosses ([`super::cut`]): their normal flux enters those cells'
+    /// continuity and the cells' pressure pushes on them; the layer
+    /// constrains no face, free sheets and filaments keep eq. (24).
+    Cut,
 }
 
 /// Parameters of the coupled solve.
@@ -217,6 +222,14 @@ pub struct CouplingInfo {
     /// layer (`coupling.layer: jump`; 0 otherwise).
     #[serde(default)]
     pub trimmed_cells: usize,
+    /// Liquid cells the surface layer closes (`coupling.layer: cut`; 0
+    /// otherwise), and of them the free ones: no layer particle within
+    /// reach, a ghost-fluid free surface ([`super::cut::Cut::free`]).
+    #[serde(default)]
+    pub cut_cells: usize,
+    /// See `cut_cells`.
+    #[serde(default)]
+    pub cut_free_cells: usize,
     /// Mean pressure (Pa) of the liquid cells deeper than Δx below the
     /// surface (0 if none): the Young–Laplace jump of a droplet at rest.
     pub interior_pressure: Real,

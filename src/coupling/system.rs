@@ -242,7 +242,13 @@ pub fn assemble(
     face_fill: bool,
     shared: bool,
     given: Option<&ParticleOrder>,
+    cut: &[(usize, usize, Vec3)],
 ) -> Result<Assembled, SolveError> {
+    if form == Form::Monolithic && !cut.is_empty() {
+        return Err(SolveError::Dimension(
+            "the cut layer's rows are built for the reduced form only".into(),
+        ));
+    }
     let nq = sys.a.len();
     let np = surf.len();
     let nk = if form == Form::Monolithic { k.len() } else { 0 };
@@ -319,6 +325,19 @@ pub fn assemble(
             rhs[r] = -(surf.mass[i] * surf.u[i][d]
                 + sc.dt * (sc.sigma * surf.area[i] * lx[i][d] + surf.force[i][d]))
                 / vol;
+        }
+    }
+    // the cut layer (super::cut): the cells' rows carry the particles'
+    // normal flux, the particles' rows the cells' pressure
+    for &(c, i, v) in cut {
+        for d in 0..3 {
+            if v[d] != 0.0 {
+                let r = ur(i, d);
+                t.push(Triplet::new(qo + c, r, v[d]));
+                if !surf.fixed[i] {
+                    t.push(Triplet::new(r, qo + c, v[d]));
+                }
+            }
         }
     }
     // coupling through the constraint faces
@@ -517,6 +536,7 @@ pub(super) fn eq24_residual(
         false,
         false,
         None,
+        &[],
     )
     .map_err(solve_err("eq. (24) residual"))?;
     let SystemMatrix::General(m) = &sys.matrix else {

@@ -317,14 +317,23 @@ pub fn particles_to_grid(
     } else {
         Vec::new()
     };
+    let mut gaps: Vec<bool> = Vec::new();
     if set.separate_bodies {
         // liquid cells that the volume particles do not join stay apart
         let gap = super::bodies::separated_cells(g, parts, &phi, &near);
         make_air(&mut phi, &gap);
+        gaps = gap;
     }
     if set.open_gaps {
         let gap = gap_cells(g, sort, parts, &phi, &near);
         make_air(&mut phi, &gap);
+        if gaps.is_empty() {
+            gaps = gap;
+        } else {
+            for (a, b) in gaps.iter_mut().zip(&gap) {
+                *a |= *b;
+            }
+        }
     }
     // The distance to the nearest particle is not a distance to the surface
     // deep inside the liquid; one Jacobi pass of the Lipschitz bound
@@ -356,6 +365,7 @@ pub fn particles_to_grid(
         .collect();
     grid.u = u;
     grid.phi = phi;
+    grid.gap = gaps;
     valid
 }
 

@@ -117,6 +117,7 @@ impl SlabCase {
             layer = match self.layer {
                 LayerTension::Coupled => "coupled",
                 LayerTension::Jump => "jump",
+                LayerTension::Cut => "cut",
             },
             a = lo[0],
             b = lo[1],

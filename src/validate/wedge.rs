@@ -67,6 +67,7 @@ impl WedgeCase {
             layer = match self.layer {
                 LayerTension::Coupled => "coupled",
                 LayerTension::Jump => "jump",
+                LayerTension::Cut => "cut",
             },
         );
         super::liquid_case(&yaml, "wedge.yaml")

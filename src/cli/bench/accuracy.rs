@@ -77,6 +77,8 @@ pub enum LayerArg {
     Coupled,
     /// A ghost-fluid pressure jump at the free surface.
     Jump,
+    /// The liquid ends at the layer, which closes the cells it crosses.
+    Cut,
 }
 
 impl From<LayerArg> for LayerTension {
@@ -84,6 +86,7 @@ impl From<LayerArg> for LayerTension {
         match a {
             LayerArg::Coupled => LayerTension::Coupled,
             LayerArg::Jump => LayerTension::Jump,
+            LayerArg::Cut => LayerTension::Cut,
         }
     }
 }

@@ -1,0 +1,563 @@
+//! Cut-cell coupling of a volume's surface layer (`coupling.layer: cut`),
+//! beyond the paper's §7.
+//!
+//! Eq. (24) hands the layer's tension to the grid through the constraint
+//! faces of eq. (18): every face in the particles' control volume moves
+//! with J u. A liquid cell past the sheet whose open faces are all
+//! constraint faces then has a continuity row on J u alone, which forbids
+//! the sheet's tangential compression there (`docs/decisions.md`, "The
+//! coupled layer holds a body's edges"). Here the liquid ends at the sheet
+//! instead, and the sheet is the moving boundary of the cells it crosses:
+//!
+//! - ψ, the cut's level set: within 2Δx of the layer, the signed distance
+//!   to the tangent plane of the nearest layer particle (its normal b³
+//!   turned outward), zero [`OFFSET`] spacings past it; elsewhere the
+//!   liquid level set φ moved by `shift`. Liquid cells: ψ < 0, and near the
+//!   layer every cell the cut reaches ([`CELL_REACH`]); a cell whose every
+//!   face is closed is none, nor is one a separation rule made air
+//!   (`solver.separate_bodies`, `solver.open_gaps`);
+//! - a face between two liquid cells carries its liquid aperture a_f, the
+//!   fraction of the face with ψ < 0 from ψ at its corners
+//!   ([`crate::grid::fraction_inside`]), both as the face's mass and as its
+//!   share of the flux;
+//! - the rest of a liquid cell's boundary is the sheet. Its area vector is
+//!   the closure A_c = Σ_f n_{c,f} w_f (1 − a_f) Δx² (n the face's outward
+//!   normal, w its open fraction; 0 inside the liquid), and the layer
+//!   particles within [`REACH`] of the cell centre that face the same way
+//!   carry its flux with weights ω_ic ∝ S_i (1 − r²/R²)² max(0, n_i · Â_c/|Â_c|),
+//!   Σ_i ω_ic = 1 (in a thin sheet of liquid the other face's particles are
+//!   within reach too);
+//! - continuity of cell c: Σ_f s_{c,f} a_f w_f v_f Δx² + A_c · Σ_i ω_ic u_i
+//!   = 0; the particle i feels the transpose, Δt Σ_c p_c ω_ic A_c.
+//!
+//! With the closure a uniform translation is divergence free in every cell,
+//! whatever the apertures. At rest the pressure of the cells a particle
+//! closes balances its tension σ S_i (L x)_i; no liquid lies past the sheet
+//! and no continuity row constrains the sheet's area. In the scaled
+//! unknowns of [`super::system`] (q = Δt p/(ρΔx), m̂ = m/(ρΔx³)) the cell
+//! row gains Â_c ω_ic · u_i and particle i's row (negated as eq. 24 is)
+//! gains Â_c ω_ic q_c, Â = A/Δx²: the two blocks are each other's
+//! transposes. A liquid cell with sheet area but no layer particle within
+//! reach (a hole in the layer, a body without one) keeps the ghost-fluid
+//! free surface there (q = 0 at ψ = 0), counted as a free cell.
+
+use super::surface::Surface;
+use crate::grid::extrapolate::is_wall_face;
+use crate::grid::pcg::Stencil7;
+use crate::grid::projection::{unit, FaceValues, Poisson};
+use crate::grid::transfer::Valid;
+use crate::grid::{fraction_inside, MacGrid, NONE};
+use crate::math::{Real, Vec3};
+use crate::solids::SolidSet;
+use rayon::prelude::*;
+
+/// Radius (cells) within which the layer particles close a cut cell: the
+/// layer lies up to one spacing past ψ = 0 and the cell centre up to a
+/// cell inside it.
+pub const REACH: Real = 1.5;
+
+/// Where the liquid ends past the layer particles, in particle spacings:
+/// a body's surface lies half a spacing past its outermost particles. The
+/// resting droplet's pressure is then within 1.3 % of 2σ/R at R = 4–8 Δx
+/// (with the cut at the particles, +8.6 % to +2.8 %: the tension acts on
+/// the layer's area, the pressure on the cut's).
+pub const OFFSET: Real = 0.5;
+
+/// Cells whose centre lies within this many Δx outside ψ = 0 near the
+/// layer are liquid cells: √3/2 takes in every cell the cut surface
+/// reaches. With only the cells whose centre is inside, the cut's area fell
+/// short of the layer's (the faces the sheet crosses outside those cells
+/// close at the cell boundary) and the resting pressure was 5 % high at
+/// R = 4 Δx.
+pub const CELL_REACH: Real = 0.87;
+
+/// Fraction of the layer particles' mass they keep as inertia in the solve.
+/// The liquid up to the cut already carries the body's mass (the cut lies
+/// past the layer), so the whole mass counts the layer twice: the l = 2
+/// period was +3.2 % at R = 6.144 Δx (Δt = 0.01 s), +0.3 % at 0.25 and
+/// −0.1 % at 0.1. But the layer's inertia is what holds its particles where
+/// the pressure balances their tension poorly, at a thin sheet's rim: at
+/// 0.25 the slab of `validate slab` failed (particle speeds over 6 m/s in
+/// the solve) at 1.5–3 cells for some offsets, at 0.1 at every one. 0.5
+/// runs them all and keeps the period within +1.2 % (+2.3 % at 0.005 s).
+pub const LAYER_INERTIA: Real = 0.5;
+
+/// Closures smaller than this (in Δx²) are rounding: the cell is interior.
+const MIN_CLOSURE: Real = 1e-3;
+
+/// The cut geometry of one substep.
+#[derive(Clone, Debug)]
+pub struct Cut {
+    /// ψ at the cell centres (extended half a cell into solids).
+    pub psi: Vec<Real>,
+    /// Liquid cell of each slot.
+    pub liquid: Vec<bool>,
+    /// Liquid cells with sheet area and no layer particle within reach:
+    /// ghost-fluid free surface on their faces to air.
+    pub free: Vec<bool>,
+    /// Aperture of the lower face of each slot, per axis (between two
+    /// liquid cells; 0 elsewhere).
+    pub aperture: [Vec<Real>; 3],
+    /// (cell slot, particle (joint index), ω_ic Â_c), by slot then particle.
+    pub entries: Vec<(usize, usize, Vec3)>,
+    /// Liquid cells closed by the sheet.
+    pub cut_cells: usize,
+    /// Of which free ([`Cut::free`]).
+    pub free_cells: usize,
+}
+
+impl Cut {
+    /// The geometry for ψ = `grid.phi` + `shift`; the layer particles of
+    /// `surf` (its `attached` sheet particles) close the cut cells.
+    pub fn build(
+        g: &MacGrid,
+        solids: &SolidSet,
+        surf: &Surface,
+        h: Real,
+        shift: Real,
+        spacing: Real,
+    ) -> Cut {
+        let ns = g.slots();
+        let dx = g.dx;
+        let offset = -OFFSET * spacing;
+        let tau = CELL_REACH * dx;
+        let key = |c: [isize; 3]| -> i64 {
+            (c[2] as i64 * g.n[1] as i64 + c[1] as i64) * g.n[0] as i64 + c[0] as i64
+        };
+        // the layer particles, their outward normals (b³ turned up the
+        // level set's gradient) and their buckets by cell (key, joint index)
+        let layer: Vec<usize> = (0..surf.n_sheet()).filter(|&i| surf.attached[i]).collect();
+        let phi_at = |c: [isize; 3]| g.slot(c[0], c[1], c[2]).map(|t| g.phi[t]);
+        let mut normal = vec![Vec3::zeros(); surf.len()];
+        for &i in &layer {
+            let x = surf.nb.x[i];
+            // outward: away from the volume particles within h (as the
+            // jump's layer points), else up the level set's gradient
+            let mut out = Vec3::zeros();
+            if let Some((volume, cells)) = &surf.volume {
+                let (mut sum, mut count) = (Vec3::zeros(), 0usize);
+                cells.for_each_within(volume, &x, h, |j, _| {
+                    sum += volume[j];
+                    count += 1;
+                });
+                if count > 0 {
+                    out = x - sum / count as Real;
+                }
+            }
+            if out == Vec3::zeros() {
+                let c = g.cell_of(&x);
+                for a in 0..3 {
+                    let (mut lo, mut hi) = (c, c);
+                    lo[a] -= 1;
+                    hi[a] += 1;
+                    if let (Some(l), Some(h)) = (phi_at(lo), phi_at(hi)) {
+                        out[a] = h - l;
+                    }
+                }
+            }
+            let n: Vec3 = surf.axes[i].column(2).into();
+            normal[i] = if n.dot(&out) < 0.0 { -n } else { n };
+        }
+        let mut bucket: Vec<(i64, usize)> = layer
+            .iter()
+            .map(|&i| (key(g.cell_of(&surf.nb.x[i])), i))
+            .collect();
+        bucket.sort_unstable();
+        // the layer particles of the cells within `r` of cell c
+        let around = |c: [isize; 3], r: isize, f: &mut dyn FnMut(usize)| {
+            for dk in -r..=r {
+                for dj in -r..=r {
+                    for di in -r..=r {
+                        let n = [c[0] + di, c[1] + dj, c[2] + dk];
+                        if (0..3).any(|d| n[d] < 0 || n[d] >= g.n[d] as isize) {
+                            continue;
+                        }
+                        let k = key(n);
+                        let from = bucket.partition_point(|e| e.0 < k);
+                        for &(kk, i) in &bucket[from..] {
+                            if kk != k {
+                                break;
+                            }
+                            f(i);
+                        }
+                    }
+                }
+            }
+        };
+        // near the layer: the signed distance to the tangent plane of the
+        // nearest layer particle (+ offset); elsewhere φ + shift
+        let near_sdf = |x: &Vec3| -> Option<Real> {
+            let c = g.cell_of(x);
+            let mut best: Option<(Real, usize)> = None;
+            around(c, 2, &mut |i| {
+                let d = (surf.nb.x[i] - x).norm_squared();
+                if best.is_none_or(|b| d < b.0 || (d == b.0 && i < b.1)) {
+                    best = Some((d, i));
+                }
+            });
+            best.filter(|b| b.0 < (2.0 * dx).powi(2))
+                .map(|(_, i)| (x - surf.nb.x[i]).dot(&normal[i]) + offset)
+        };
+        let (psi, near): (Vec<Real>, Vec<bool>) = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                let x = g.cell_pos(s);
+                let sdf = if g.in_domain(s) { near_sdf(&x) } else { None };
+                let p = sdf.unwrap_or(g.phi[s] + shift);
+                if !solids.is_empty() && p < 0.5 * dx && solids.phi(&x) < 0.0 {
+                    (p.min(-0.5 * dx), sdf.is_some())
+                } else {
+                    (p, sdf.is_some())
+                }
+            })
+            .unzip();
+        let open = |s: usize, a: usize| -> Real {
+            match g.neighbor(s, unit(a, 1)) {
+                Some(t) => g.weight[a][s] + g.weight[a][t],
+                None => g.weight[a][s],
+            }
+        };
+        let mut liquid: Vec<bool> = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                let bound = if near[s] { tau } else { 0.0 };
+                // (a separation rule's air stays air)
+                !g.gap.get(s).copied().unwrap_or(false)
+                    && g.in_domain(s)
+                    && psi[s] < bound
+                    && (0..3).map(|a| open(s, a)).sum::<Real>() > 0.0
+            })
+            .collect();
+        // ψ at a node (lower corner of cell c): the layer's plane distance
+        // near it, else the mean of its 8 cells
+        let node = |c: [isize; 3]| -> Real {
+            let x = g.origin + Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real) * dx;
+            near_sdf(&x).unwrap_or_else(|| {
+                let mut sum = 0.0;
+                for dk in -1..=0 {
+                    for dj in -1..=0 {
+                        for di in -1..=0 {
+                            sum += g
+                                .slot(c[0] + di, c[1] + dj, c[2] + dk)
+                                .map_or(dx, |t| psi[t]);
+                        }
+                    }
+                }
+                sum / 8.0
+            })
+        };
+        // the aperture of the lower face (axis a) of slot s between two
+        // liquid cells: its fraction with ψ < 0
+        let apertures = |liquid: &[bool]| -> [Vec<Real>; 3] {
+            [0, 1, 2].map(|a| {
+                (0..ns)
+                    .into_par_iter()
+                    .map(|s| {
+                        let lo = match g.neighbor(s, unit(a, -1)) {
+                            Some(l) => l,
+                            None => return 0.0,
+                        };
+                        if !(liquid[s] && liquid[lo]) || g.weight[a][s] == 0.0 {
+                            return 0.0;
+                        }
+                        let c = g.cell(s);
+                        let (b, d) = ((a + 1) % 3, (a + 2) % 3);
+                        let at = |i: isize, j: isize| {
+                            let mut n = c;
+                            n[b] += i;
+                            n[d] += j;
+                            node(n)
+                        };
+                        let p = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
+                        fraction_inside(p)
+                    })
+                    .collect()
+            })
+        };
+        // a cell whose every face is closed has neither a flux nor a sheet
+        // area (the closure of six closed faces is 0): it is no liquid cell
+        let mut aperture = apertures(&liquid);
+        for _ in 0..3 {
+            let lone: Vec<usize> = (0..ns)
+                .into_par_iter()
+                .filter(|&s| {
+                    liquid[s]
+                        && (0..3).all(|a| {
+                            aperture[a][s] == 0.0
+                                && g.neighbor(s, unit(a, 1))
+                                    .is_none_or(|t| aperture[a][t] == 0.0)
+                        })
+                })
+                .collect();
+            if lone.is_empty() {
+                break;
+            }
+            for s in lone {
+                liquid[s] = false;
+            }
+            aperture = apertures(&liquid);
+        }
+        // Â_c = Σ_f n_out (w − open) over the six faces of a liquid cell
+        let closure = |s: usize| -> Vec3 {
+            let mut v = Vec3::zeros();
+            for a in 0..3 {
+                let w = g.weight[a][s];
+                if w > 0.0 && !g.is_prescribed(a, s) {
+                    v[a] -= w * (1.0 - aperture[a][s]);
+                }
+                if let Some(t) = g.neighbor(s, unit(a, 1)) {
+                    let w = g.weight[a][t];
+                    if w > 0.0 && !g.is_prescribed(a, t) {
+                        v[a] += w * (1.0 - aperture[a][t]);
+                    }
+                }
+            }
+            v
+        };
+        let reach = REACH * dx;
+        let r = REACH.ceil() as isize;
+        let cells: Vec<usize> = (0..ns).filter(|&s| liquid[s]).collect();
+        let per_cell: Vec<Option<Vec<(usize, usize, Vec3)>>> = cells
+            .par_iter()
+            .map(|&s| {
+                let a_c = closure(s);
+                if a_c.norm() < MIN_CLOSURE {
+                    return Some(Vec::new());
+                }
+                let c = g.cell(s);
+                let xc = g.cell_pos(s);
+                let mut found: Vec<(usize, Real)> = Vec::new();
+                let dir = a_c.normalize();
+                around(c, r, &mut |i| {
+                    let q = ((surf.nb.x[i] - xc).norm() / reach).powi(2);
+                    let cos = normal[i].dot(&dir);
+                    if q < 1.0 && cos > 0.0 {
+                        found.push((i, surf.area[i] * (1.0 - q) * (1.0 - q) * cos));
+                    }
+                });
+                let total: Real = found.iter().map(|e| e.1).sum();
+                if total <= 0.0 || !total.is_finite() {
+                    return None;
+                }
+                found.sort_unstable_by_key(|e| e.0);
+                Some(
+                    found
+                        .into_iter()
+                        .map(|(i, w)| (s, i, a_c * (w / total)))
+                        .collect(),
+                )
+            })
+            .collect();
+        let mut free = vec![false; ns];
+        let mut entries = Vec::new();
+        let (mut cut_cells, mut free_cells) = (0, 0);
+        for (&s, e) in cells.iter().zip(per_cell) {
+            match e {
+                None => {
+                    free[s] = true;
+                    free_cells += 1;
+                    cut_cells += 1;
+                }
+                Some(e) => {
+                    cut_cells += (!e.is_empty()) as usize;
+                    entries.extend(e);
+                }
+            }
+        }
+        Cut {
+            psi,
+            liquid,
+            free,
+            aperture,
+            entries,
+            cut_cells,
+            free_cells,
+        }
+    }
+
+    /// The pressure system of the cut liquid: a_f w_f between liquid cells,
+    /// the ghost-fluid free surface on the faces of free cells to air, and
+    /// nothing on the faces the sheet closes (its flux is the particles').
+    /// Faces for which `skip(axis, slot)` is true are left out as in
+    /// [`Poisson::build`].
+    pub fn poisson(&self, g: &MacGrid, skip: impl Fn(usize, usize) -> bool + Sync) -> Poisson {
+        let ns = g.slots();
+        let dx = g.dx;
+        let mut index = vec![NONE; ns];
+        let mut cells = Vec::new();
+        for (s, i) in index.iter_mut().enumerate() {
+            if self.liquid[s] {
+                *i = cells.len() as u32;
+                cells.push(s);
+            }
+        }
+        let psi = &self.psi;
+        // (a cell within CELL_REACH outside ψ = 0 takes the face's whole length)
+        let ghost = |pin: Real, pout: Real| -> (Real, usize) {
+            if pin >= 0.0 {
+                return (1.0, 0);
+            }
+            let t = pin / (pin - pout);
+            if t < crate::grid::projection::THETA_MIN {
+                (crate::grid::projection::THETA_MIN, 1)
+            } else {
+                (t.min(1.0), 0)
+            }
+        };
+        type Row = (Real, [u32; 3], [Real; 3], [u32; 3], Real, usize);
+        let rows: Vec<Row> = cells
+            .par_iter()
+            .map(|&s| {
+                let mut diag = 0.0;
+                let mut up = [NONE; 3];
+                let mut lo = [NONE; 3];
+                let mut off = [0.0; 3];
+                let mut rhs = 0.0;
+                let mut clamps = 0;
+                for a in 0..3 {
+                    let w = g.weight[a][s];
+                    if w > 0.0 && g.is_prescribed(a, s) {
+                        rhs += w * g.u[a][s];
+                    } else if w > 0.0 && !skip(a, s) {
+                        let n = g.neighbor(s, unit(a, -1));
+                        match n.filter(|&n| self.liquid[n]) {
+                            Some(n) => {
+                                let ap = self.aperture[a][s];
+                                if ap > 0.0 {
+                                    rhs += ap * w * g.u[a][s];
+                                    diag += ap * w;
+                                    lo[a] = index[n];
+                                }
+                            }
+                            None if self.free[s] => {
+                                let (th, c) = ghost(psi[s], n.map_or(dx, |n| psi[n]));
+                                clamps += c;
+                                rhs += w * g.u[a][s];
+                                diag += w / th;
+                            }
+                            None => {}
+                        }
+                    }
+                    let t = g.neighbor(s, unit(a, 1));
+                    let w = t.map_or(0.0, |t| g.weight[a][t]);
+                    if w > 0.0 {
+                        let t = t.unwrap_or(0);
+                        if g.is_prescribed(a, t) {
+                            rhs -= w * g.u[a][t];
+                            continue;
+                        }
+                        if skip(a, t) {
+                            continue;
+                        }
+                        if self.liquid[t] {
+                            let ap = self.aperture[a][t];
+                            if ap > 0.0 {
+                                rhs -= ap * w * g.u[a][t];
+                                diag += ap * w;
+                                up[a] = index[t];
+                                off[a] = -ap * w;
+                            }
+                        } else if self.free[s] {
+                            let (th, c) = ghost(psi[s], psi[t]);
+                            clamps += c;
+                            rhs -= w * g.u[a][t];
+                            diag += w / th;
+                        }
+                    }
+                }
+                (diag, up, off, lo, rhs, clamps)
+            })
+            .collect();
+        let mut a = Stencil7::default();
+        let mut b = Vec::with_capacity(rows.len());
+        let mut theta_clamps = 0;
+        for (d, up, off, lo, r, c) in rows {
+            a.diag.push(d);
+            a.up.push(up);
+            a.off.push(off);
+            a.lo.push(lo);
+            b.push(r);
+            theta_clamps += c;
+        }
+        Poisson {
+            phi: self.psi.clone(),
+            index,
+            cells,
+            a,
+            b,
+            theta_clamps,
+            air: FaceValues::default(),
+        }
+    }
+
+    /// The coupling entries with the cells as unknowns of `sys` (built by
+    /// [`Cut::poisson`]): (cell, particle, ω_ic Â_c).
+    pub fn coupling(&self, sys: &Poisson) -> Vec<(usize, usize, Vec3)> {
+        self.entries
+            .iter()
+            .filter_map(|&(s, i, v)| sys.unknown(s).map(|c| (c as usize, i, v)))
+            .collect()
+    }
+
+    /// Pressure update of the faces the solve sets: between liquid cells
+    /// (u_f − (q_hi − q_lo)), on the free cells' faces to air and on the
+    /// constraint faces (`is_k`; ghost-fluid θ as [`Poisson::apply`], plus
+    /// `extra`). The faces the sheet closes are left invalid for the
+    /// extrapolation. Returns the faces that hold a projected value.
+    pub fn apply(
+        &self,
+        grid: &mut MacGrid,
+        sys: &Poisson,
+        q: &[Real],
+        is_k: impl Fn(usize, usize) -> bool + Sync,
+        extra: impl Fn(usize, usize) -> Real + Sync,
+    ) -> Valid {
+        let g: &MacGrid = grid;
+        let ns = g.slots();
+        let mut valid: Valid = Default::default();
+        let mut newu: [Vec<Real>; 3] = Default::default();
+        for ax in 0..3 {
+            let (nu, vf): (Vec<Real>, Vec<u8>) = (0..ns)
+                .into_par_iter()
+                .map(|s| {
+                    let u = g.u[ax][s];
+                    if is_wall_face(g, s, ax) || g.weight[ax][s] == 0.0 {
+                        return (0.0, 0);
+                    }
+                    if g.is_prescribed(ax, s) {
+                        return (u, 1);
+                    }
+                    let Some(f) = sys.face(g, ax, s) else {
+                        return (u, 0);
+                    };
+                    let ql = f.lo.map_or(0.0, |i| q[i as usize]);
+                    let qh = f.hi.map_or(0.0, |i| q[i as usize]);
+                    if is_k(ax, s) {
+                        return (u - (qh - ql) / f.theta + extra(ax, s), 1);
+                    }
+                    match (f.lo, f.hi) {
+                        (Some(_), Some(_)) if self.aperture[ax][s] > 0.0 => (u - (qh - ql), 1),
+                        (Some(_), Some(_)) => (u, 0),
+                        (Some(_), None) | (None, Some(_)) => {
+                            let c = if f.hi.is_some() {
+                                s
+                            } else {
+                                g.neighbor(s, unit(ax, -1)).unwrap_or(s)
+                            };
+                            if self.free[c] {
+                                (u - (qh - ql) / f.theta, 1)
+                            } else {
+                                (u, 0)
+                            }
+                        }
+                        (None, None) => (u, 0),
+                    }
+                })
+                .unzip();
+            newu[ax] = nu;
+            valid[ax] = vf;
+        }
+        grid.u = newu;
+        valid
+    }
+}
