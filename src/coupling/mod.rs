@@ -14,6 +14,8 @@
 //! - [`jump`]: with `coupling.layer: jump`, a volume's surface layer gives
 //!   the grid a ghost-fluid pressure jump σκ instead of tension rows and
 //!   constraint faces (free sheets and filaments keep eq. 24);
+//! - `forms`: one form assembled, factored and solved, and the solve
+//!   without coupling rows;
 //! - [`cut`]: with `coupling.layer: cut`, the liquid ends at a volume's
 //!   surface layer, whose particles close the cells it crosses (their
 //!   normal flux in the cells' continuity, the cells' pressure on them).
@@ -29,6 +31,7 @@ pub mod band;
 pub mod codim;
 pub mod cut;
 pub mod faces;
+mod forms;
 pub mod jump;
 pub mod params;
 pub mod release;
@@ -38,16 +41,12 @@ pub mod system;
 pub mod warm;
 
 use crate::grid::extrapolate::{constrain_solids, extrapolate};
-use crate::grid::pcg::pcg;
 use crate::grid::projection::Poisson;
 use crate::grid::MacGrid;
-use crate::linsolve::{
-    bicgstab, gmres, Csr, GmresParams, Ilu0, Operator, Preconditioner, SolveError, TripledIlu,
-};
+use crate::linsolve::SolveError;
 use crate::math::{Real, Vec3};
 use crate::particles::Particles;
 use crate::solids::SolidSet;
-use crate::tension::{solve as solve_tension, CurvaturePart, TensionSystem};
 pub use band::{band_correction, band_extension, BAND_PROBE};
 pub use params::{
     BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Krylov, LayerTension,
@@ -56,7 +55,7 @@ pub use params::{
 use std::time::Instant;
 pub use surface::{SurfaceCounts, SurfaceParams};
 pub use system::IluOrder;
-use system::{assemble, eq24_residual, Form, Scalars, SystemMatrix};
+use system::{eq24_residual, Form, Scalars};
 pub use warm::WarmStart;
 
 fn solve_err(stage: &'static str) -> impl Fn(SolveError) -> CouplingError {
@@ -245,7 +244,7 @@ pub fn solve(
         info.faces = k.len();
         let cut_rows = cut.as_ref().map_or(Vec::new(), |c| c.coupling(&full));
         if k.is_empty() && cut_rows.is_empty() {
-            return solve_uncoupled(
+            return forms::solve_uncoupled(
                 grid,
                 solids,
                 parts,
@@ -283,7 +282,7 @@ pub fn solve(
             } else {
                 Instant::now()
             };
-            match solve_form(
+            match forms::solve_form(
                 form,
                 grid,
                 solids,
@@ -394,90 +393,6 @@ pub fn solve(
     Ok(info)
 }
 
-/// The solve when no face is constrained: the pressure projection and the
-/// particles' tension solve are independent (no coupling rows).
-#[allow(clippy::too_many_arguments)]
-fn solve_uncoupled(
-    grid: &mut MacGrid,
-    solids: &SolidSet,
-    parts: &mut Particles,
-    prm: &CouplingParams,
-    dt: Real,
-    layers: usize,
-    surf: &surface::Surface,
-    full: &Poisson,
-    cut: Option<&cut::Cut>,
-    mut info: CouplingInfo,
-    t: Instant,
-) -> Result<CouplingInfo, CouplingError> {
-    // no coupling rows: the two blocks are independent; the pressure is the
-    // liquid's projection (`full`, with the surface layer's jump if any)
-    info.assemble_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let mut q = vec![0.0; full.a.len()];
-    let p = pcg(&full.a, &full.b, &mut q, prm.pressure).map_err(CouplingError::Pressure)?;
-    info.iterations = p.iterations as usize;
-    info.rel_residual = p.rel_residual;
-    info.interior_pressure = interior_pressure(
-        full,
-        &q,
-        grid.dx,
-        Scalars {
-            dt,
-            sigma: prm.surface.sigma,
-            viscosity: prm.surface.viscosity,
-            density: prm.surface.density,
-            dx: grid.dx,
-            theta: prm.surface.tension_theta,
-        },
-    );
-    let mut valid = match cut {
-        Some(c) => c.apply(grid, full, &q, |_, _| false, |_, _| 0.0),
-        None => full.apply(grid, &q, |_, _| 0.0),
-    };
-    extrapolate(grid, &mut valid, layers);
-    constrain_solids(grid, solids);
-    if !surf.is_empty() {
-        let sys = TensionSystem {
-            laplacian: surf.laplacian.as_ref(),
-            mass: &surf.mass,
-            area: &surf.area,
-            x: &surf.nb.x,
-            u: &surf.u,
-            f_explicit: &surf.force,
-            fixed: &surf.fixed,
-            drag: &[],
-            nu: prm.surface.viscosity / prm.surface.density,
-            sigma: prm.surface.sigma,
-            dt,
-            curvature: CurvaturePart::Normal {
-                axes: &surf.axes,
-                n_sheet: surf.n_sheet(),
-            },
-            diffusive: prm.surface.diffusive,
-            theta: prm.surface.tension_theta,
-        };
-        let sol = solve_tension(&sys, &prm.solver).map_err(solve_err("surface tension"))?;
-        info.iterations += sol.info.iter().map(|s| s.iterations).sum::<usize>();
-        info.rel_residual = sol
-            .info
-            .iter()
-            .fold(info.rel_residual, |m, s| m.max(s.rel_residual));
-        let mut u = sol.u;
-        if prm.layer != LayerTension::Coupled {
-            // the surface layer moves with the liquid it bounds
-            for (i, &s) in surf.nb.store.iter().enumerate() {
-                if surf.attached[i] {
-                    u[i] = grid.velocity(&parts.x[s]);
-                }
-            }
-        }
-        write_back(parts, surf, &u);
-    }
-    info.solve_s = t.elapsed().as_secs_f64();
-    Ok(info)
-}
-
 /// Mass (kg) and number of the volume particles, summed in store order.
 fn volume_totals(parts: &Particles) -> (Real, usize) {
     let (mut m, mut n) = (0.0, 0usize);
@@ -510,138 +425,6 @@ fn interior_pressure(full: &Poisson, q: &[Real], dx: Real, sc: Scalars) -> Real 
     } else {
         sum / n as Real * sc.density * dx / sc.dt
     }
-}
-
-/// Assembles, factors and solves one form; returns the system, the solution
-/// and the solution kept for the next substep's warm start.
-#[allow(clippy::too_many_arguments)]
-fn solve_form(
-    form: Form,
-    grid: &MacGrid,
-    solids: &SolidSet,
-    full: &Poisson,
-    surf: &surface::Surface,
-    k: &faces::Constraints,
-    vstar: &[Real],
-    band: &[Real],
-    sc: Scalars,
-    prm: &CouplingParams,
-    info: &mut CouplingInfo,
-    t: Instant,
-    warm: Option<&WarmStart>,
-    order: Option<&system::ParticleOrder>,
-    cut: Option<&cut::Cut>,
-) -> Result<(system::Assembled, Vec<Real>, WarmStart), CouplingError> {
-    let reduced = (form == Form::Reduced).then(|| {
-        let skip = |a, s| k.index(a, s).is_some();
-        let mut r = match cut {
-            Some(c) => c.poisson(grid, skip),
-            None => Poisson::build(grid, solids, skip),
-        };
-        if !full.air.is_empty() {
-            r.set_air(grid, full.air.clone());
-        }
-        r
-    });
-    let pois = reduced.as_ref().unwrap_or(full);
-    let cut_rows = cut.map_or(Vec::new(), |c| c.coupling(pois));
-    let sys = assemble(
-        form,
-        pois,
-        surf,
-        k,
-        vstar,
-        band,
-        sc,
-        prm.ilu_order,
-        prm.face_fill,
-        prm.shared_block,
-        order,
-        &cut_rows,
-    )
-    .map_err(solve_err("coupled system assembly"))?;
-    let view = match &sys.matrix {
-        SystemMatrix::Shared(m) => View::Shared(m),
-        SystemMatrix::General(m) => {
-            View::General(Csr::from_faer(m.as_ref()).map_err(solve_err("coupled system"))?)
-        }
-    };
-    let op: &dyn Operator = match &view {
-        View::Shared(m) => *m,
-        View::General(a) => a,
-    };
-    let n = op.dims().0;
-    info.unknowns = n;
-    info.nonzeros = match &view {
-        View::Shared(m) => m.nonzeros(),
-        View::General(a) => a.val.len(),
-    };
-    info.assemble_s += t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let ilu: Box<dyn Preconditioner> = match &view {
-        View::Shared(m) => Box::new(
-            TripledIlu::from_tripled(m, prm.fill_passes)
-                .map_err(solve_err("coupled system ILU"))?,
-        ),
-        View::General(a) => {
-            // the trailing λ and pressure rows of the particles-first order
-            let tail = form == Form::Monolithic && prm.ilu_order == IluOrder::ParticlesFirst;
-            let passes = if tail { prm.fill_passes } else { 0 };
-            Box::new(
-                Ilu0::with_tail_fill(a, sys.mo, passes).map_err(solve_err("coupled system ILU"))?,
-            )
-        }
-    };
-    info.factor_s += t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let mut x = vec![0.0; n];
-    for (i, u) in surf.u.iter().enumerate() {
-        for d in 0..3 {
-            x[sys.u_row(i, d)] = u[d];
-        }
-    }
-    if let Some(w) = warm {
-        let pois = reduced.as_ref().unwrap_or(full);
-        let mut xw = x.clone();
-        let n = w.seed(grid, pois, k, &sys, sc, &mut xw);
-        if n > 0 && warm::residual_norm(op, &sys.rhs, &xw) < warm::residual_norm(op, &sys.rhs, &x) {
-            x = xw;
-            info.warm_seeded = n;
-        }
-    }
-    let s = match prm.krylov {
-        Krylov::Gmres { restart } => gmres(
-            op,
-            &sys.rhs,
-            &mut x,
-            ilu.as_ref(),
-            &GmresParams {
-                tol: prm.solver.tol,
-                max_iter: prm.solver.max_iter,
-                restart,
-            },
-        ),
-        Krylov::Bicgstab => bicgstab(op, &sys.rhs, &mut x, ilu.as_ref(), &prm.solver),
-    };
-    info.solve_s += t.elapsed().as_secs_f64();
-    let s = s.map_err(solve_err(match (form, prm.krylov) {
-        (Form::Monolithic, Krylov::Gmres { .. }) => "coupled system GMRES (monolithic)",
-        (Form::Reduced, Krylov::Gmres { .. }) => "coupled system GMRES (Schur)",
-        (Form::Monolithic, Krylov::Bicgstab) => "coupled system BiCGSTAB (monolithic)",
-        (Form::Reduced, Krylov::Bicgstab) => "coupled system BiCGSTAB (Schur)",
-    }))?;
-    info.iterations += s.iterations;
-    info.rel_residual = s.rel_residual;
-    let kept = WarmStart::capture(grid, reduced.as_ref().unwrap_or(full), k, &sys, &x, sc);
-    Ok((sys, x, kept))
-}
-
-/// The assembled matrix as the solver reads it.
-enum View<'a> {
-    /// eq. (24) particles first, its particle block stored once.
-    Shared(&'a crate::linsolve::Tripled),
-    /// General compressed rows.
-    General(Csr<'a>),
 }
 
 /// u^{n+1} and the updated radii into the store (fixed particles keep theirs;
