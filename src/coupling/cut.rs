@@ -42,9 +42,7 @@
 //! free surface there (q = 0 at ψ = 0), counted as a free cell.
 
 use super::surface::Surface;
-use crate::grid::extrapolate::is_wall_face;
-use crate::grid::pcg::Stencil7;
-use crate::grid::projection::{unit, FaceValues, Poisson};
+use crate::grid::projection::{theta, unit, Poisson, Row};
 use crate::grid::transfer::Valid;
 use crate::grid::{fraction_inside, MacGrid, NONE};
 use crate::math::{Real, Vec3};
@@ -397,14 +395,9 @@ impl Cut {
             if pin >= 0.0 {
                 return (1.0, 0);
             }
-            let t = pin / (pin - pout);
-            if t < crate::grid::projection::THETA_MIN {
-                (crate::grid::projection::THETA_MIN, 1)
-            } else {
-                (t.min(1.0), 0)
-            }
+            let (t, clamped) = theta(pin, pout);
+            (t, clamped as usize)
         };
-        type Row = (Real, [u32; 3], [Real; 3], [u32; 3], Real, usize);
         let rows: Vec<Row> = cells
             .par_iter()
             .map(|&s| {
@@ -468,26 +461,7 @@ impl Cut {
                 (diag, up, off, lo, rhs, clamps)
             })
             .collect();
-        let mut a = Stencil7::default();
-        let mut b = Vec::with_capacity(rows.len());
-        let mut theta_clamps = 0;
-        for (d, up, off, lo, r, c) in rows {
-            a.diag.push(d);
-            a.up.push(up);
-            a.off.push(off);
-            a.lo.push(lo);
-            b.push(r);
-            theta_clamps += c;
-        }
-        Poisson {
-            phi: self.psi.clone(),
-            index,
-            cells,
-            a,
-            b,
-            theta_clamps,
-            air: FaceValues::default(),
-        }
+        Poisson::from_rows(self.psi.clone(), index, cells, rows)
     }
 
     /// The coupling entries with the cells as unknowns of `sys` (built by
@@ -512,52 +486,19 @@ impl Cut {
         is_k: impl Fn(usize, usize) -> bool + Sync,
         extra: impl Fn(usize, usize) -> Real + Sync,
     ) -> Valid {
-        let g: &MacGrid = grid;
-        let ns = g.slots();
-        let mut valid: Valid = Default::default();
-        let mut newu: [Vec<Real>; 3] = Default::default();
-        for ax in 0..3 {
-            let (nu, vf): (Vec<Real>, Vec<u8>) = (0..ns)
-                .into_par_iter()
-                .map(|s| {
-                    let u = g.u[ax][s];
-                    if is_wall_face(g, s, ax) || g.weight[ax][s] == 0.0 {
-                        return (0.0, 0);
-                    }
-                    if g.is_prescribed(ax, s) {
-                        return (u, 1);
-                    }
-                    let Some(f) = sys.face(g, ax, s) else {
-                        return (u, 0);
-                    };
-                    let ql = f.lo.map_or(0.0, |i| q[i as usize]);
-                    let qh = f.hi.map_or(0.0, |i| q[i as usize]);
-                    if is_k(ax, s) {
-                        return (u - (qh - ql) / f.theta + extra(ax, s), 1);
-                    }
-                    match (f.lo, f.hi) {
-                        (Some(_), Some(_)) if self.aperture[ax][s] > 0.0 => (u - (qh - ql), 1),
-                        (Some(_), Some(_)) => (u, 0),
-                        (Some(_), None) | (None, Some(_)) => {
-                            let c = if f.hi.is_some() {
-                                s
-                            } else {
-                                g.neighbor(s, unit(ax, -1)).unwrap_or(s)
-                            };
-                            if self.free[c] {
-                                (u - (qh - ql) / f.theta, 1)
-                            } else {
-                                (u, 0)
-                            }
-                        }
-                        (None, None) => (u, 0),
-                    }
-                })
-                .unzip();
-            newu[ax] = nu;
-            valid[ax] = vf;
-        }
-        grid.u = newu;
-        valid
+        sys.update_faces(grid, |g, ax, s, u, f| {
+            let lower = |ax: usize, s: usize| g.neighbor(s, unit(ax, -1)).unwrap_or(s);
+            let ql = f.lo.map_or(0.0, |i| q[i as usize]);
+            let qh = f.hi.map_or(0.0, |i| q[i as usize]);
+            if is_k(ax, s) {
+                return (u - (qh - ql) / f.theta + extra(ax, s), 1);
+            }
+            match (f.lo, f.hi) {
+                (Some(_), Some(_)) if self.aperture[ax][s] > 0.0 => (u - (qh - ql), 1),
+                (Some(_), None) if self.free[lower(ax, s)] => (u - (qh - ql) / f.theta, 1),
+                (None, Some(_)) if self.free[s] => (u - (qh - ql) / f.theta, 1),
+                _ => (u, 0),
+            }
+        })
     }
 }

@@ -27,7 +27,7 @@ use rayon::prelude::*;
 pub const THETA_MIN: Real = 0.01;
 
 /// One matrix row: diagonal, +x/+y/+z neighbours and coefficients, −x/−y/−z neighbours, rhs, θ clamps.
-type Row = (Real, [u32; 3], [Real; 3], [u32; 3], Real, usize);
+pub(crate) type Row = (Real, [u32; 3], [Real; 3], [u32; 3], Real, usize);
 
 /// What the projection did.
 #[derive(Clone, Copy, Debug, Default)]
@@ -40,8 +40,10 @@ pub struct ProjectionInfo {
     pub theta_clamps: usize,
 }
 
+/// The ghost-fluid fraction θ of a face from the level set on its liquid
+/// and air sides, clamped to [`THETA_MIN`] (and whether it was).
 #[inline]
-fn theta(phi_in: Real, phi_out: Real) -> (Real, bool) {
+pub(crate) fn theta(phi_in: Real, phi_out: Real) -> (Real, bool) {
     let t = phi_in / (phi_in - phi_out);
     if t < THETA_MIN {
         (THETA_MIN, true)
@@ -238,6 +240,16 @@ impl Poisson {
                 (diag, up, off, lo, rhs, clamps)
             })
             .collect();
+        Poisson::from_rows(phi, index, cells, rows)
+    }
+
+    /// The system from its rows (one per unknown, in `cells` order).
+    pub(crate) fn from_rows(
+        phi: Vec<Real>,
+        index: Vec<u32>,
+        cells: Vec<usize>,
+        rows: Vec<Row>,
+    ) -> Poisson {
         let mut a = Stencil7::default();
         let mut b = Vec::with_capacity(rows.len());
         let mut theta_clamps = 0;
@@ -327,6 +339,22 @@ impl Poisson {
         q: &[Real],
         extra: impl Fn(usize, usize) -> Real + Sync,
     ) -> Valid {
+        self.update_faces(grid, |_, ax, s, u, f| {
+            let ql = f.lo.map_or_else(|| self.air.get(ax, s), |i| q[i as usize]);
+            let qh = f.hi.map_or_else(|| self.air.get(ax, s), |i| q[i as usize]);
+            (u - (qh - ql) / f.theta + extra(ax, s), 1)
+        })
+    }
+
+    /// Sets every face of `grid.u` and returns which hold a projected value:
+    /// walls and closed faces 0 (invalid), prescribed faces kept (valid),
+    /// faces with no liquid side kept (invalid), and each face next to
+    /// liquid as `rule(grid, axis, slot, u, sides)` says (new value, valid).
+    pub(crate) fn update_faces(
+        &self,
+        grid: &mut MacGrid,
+        rule: impl Fn(&MacGrid, usize, usize, Real, FaceSides) -> (Real, u8) + Sync,
+    ) -> Valid {
         let g: &MacGrid = grid;
         let ns = g.slots();
         let mut valid: Valid = Default::default();
@@ -343,11 +371,7 @@ impl Poisson {
                         return (u, 1);
                     }
                     match self.face(g, ax, s) {
-                        Some(f) => {
-                            let ql = f.lo.map_or_else(|| self.air.get(ax, s), |i| q[i as usize]);
-                            let qh = f.hi.map_or_else(|| self.air.get(ax, s), |i| q[i as usize]);
-                            (u - (qh - ql) / f.theta + extra(ax, s), 1)
-                        }
+                        Some(f) => rule(g, ax, s, u, f),
                         None => (u, 0),
                     }
                 })
