@@ -96,7 +96,7 @@ fn the_layer_jump_frees_a_thick_sheet_edge() {
 /// thin features that neither the coupled layer nor the jump frees (the
 /// jump: 0.27 / 0.19 at 1.5 cells, 0.02 / 0.08 at 2 cells, t = 0.05 s,
 /// session 37). Measured (session 38) at t = 0.05 s, offsets 0 / 0.5:
-/// 0.55 / 0.59 at 1.5 cells, 0.78 / 0.68 at 2 cells (0.83 / 0.79 at 3).
+/// 0.57 / 0.60 at 1.5 cells, 0.72 / 0.68 at 2 cells (0.83 / 0.79 at 3).
 #[test]
 fn the_cut_layer_frees_a_thin_sheet_edge() {
     use codimfx::validate::slab::{retract, SlabCase};

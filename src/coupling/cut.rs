@@ -46,6 +46,7 @@ use crate::grid::projection::{theta, unit, Poisson, Row};
 use crate::grid::transfer::Valid;
 use crate::grid::{fraction_inside, MacGrid, NONE};
 use crate::math::{Real, Vec3};
+use crate::neighbors::CellGrid;
 use crate::solids::SolidSet;
 use rayon::prelude::*;
 
@@ -119,9 +120,6 @@ impl Cut {
         let dx = g.dx;
         let offset = -OFFSET * spacing;
         let tau = CELL_REACH * dx;
-        let key = |c: [isize; 3]| -> i64 {
-            (c[2] as i64 * g.n[1] as i64 + c[1] as i64) * g.n[0] as i64 + c[0] as i64
-        };
         // the layer particles, their outward normals (b³ turned up the
         // level set's gradient) and their buckets by cell (key, joint index)
         let layer: Vec<usize> = (0..surf.n_sheet()).filter(|&i| surf.attached[i]).collect();
@@ -156,45 +154,21 @@ impl Cut {
             let n: Vec3 = surf.axes[i].column(2).into();
             normal[i] = if n.dot(&out) < 0.0 { -n } else { n };
         }
-        let mut bucket: Vec<(i64, usize)> = layer
-            .iter()
-            .map(|&i| (key(g.cell_of(&surf.nb.x[i])), i))
-            .collect();
-        bucket.sort_unstable();
-        // the layer particles of the cells within `r` of cell c
-        let around = |c: [isize; 3], r: isize, f: &mut dyn FnMut(usize)| {
-            for dk in -r..=r {
-                for dj in -r..=r {
-                    for di in -r..=r {
-                        let n = [c[0] + di, c[1] + dj, c[2] + dk];
-                        if (0..3).any(|d| n[d] < 0 || n[d] >= g.n[d] as isize) {
-                            continue;
-                        }
-                        let k = key(n);
-                        let from = bucket.partition_point(|e| e.0 < k);
-                        for &(kk, i) in &bucket[from..] {
-                            if kk != k {
-                                break;
-                            }
-                            f(i);
-                        }
-                    }
-                }
-            }
-        };
+        // the layer particles' positions in a cell grid of size 2Δx (the
+        // widest query), indices into `layer`
+        let pts: Vec<Vec3> = layer.iter().map(|&i| surf.nb.x[i]).collect();
+        let search = CellGrid::build(&pts, 2.0 * dx);
         // near the layer: the signed distance to the tangent plane of the
         // nearest layer particle (+ offset); elsewhere φ + shift
         let near_sdf = |x: &Vec3| -> Option<Real> {
-            let c = g.cell_of(x);
             let mut best: Option<(Real, usize)> = None;
-            around(c, 2, &mut |i| {
-                let d = (surf.nb.x[i] - x).norm_squared();
+            search.for_each_within(&pts, x, 2.0 * dx, |j, d| {
+                let i = layer[j];
                 if best.is_none_or(|b| d < b.0 || (d == b.0 && i < b.1)) {
                     best = Some((d, i));
                 }
             });
-            best.filter(|b| b.0 < (2.0 * dx).powi(2))
-                .map(|(_, i)| (x - surf.nb.x[i]).dot(&normal[i]) + offset)
+            best.map(|(_, i)| (x - surf.nb.x[i]).dot(&normal[i]) + offset)
         };
         let (psi, near): (Vec<Real>, Vec<bool>) = (0..ns)
             .into_par_iter()
@@ -228,7 +202,7 @@ impl Cut {
             .collect();
         // ψ at a node (lower corner of cell c): the layer's plane distance
         // near it, else the mean of its 8 cells
-        let node = |c: [isize; 3]| -> Real {
+        let node_at = |c: [isize; 3]| -> Real {
             let x = g.origin + Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real) * dx;
             near_sdf(&x).unwrap_or_else(|| {
                 let mut sum = 0.0;
@@ -243,6 +217,30 @@ impl Cut {
                 }
                 sum / 8.0
             })
+        };
+        // ψ at the lower corner of every slot that is a corner of a liquid
+        // cell, once (a node serves up to twelve faces, and the apertures are
+        // recomputed when lone cells are dropped)
+        let nodes: Vec<Real> = (0..ns)
+            .into_par_iter()
+            .map(|s| {
+                let c = g.cell(s);
+                let corner_of_liquid = (0..8).any(|k: isize| {
+                    g.slot(c[0] - (k & 1), c[1] - ((k >> 1) & 1), c[2] - ((k >> 2) & 1))
+                        .is_some_and(|t| liquid[t])
+                });
+                if corner_of_liquid {
+                    node_at(c)
+                } else {
+                    Real::NAN
+                }
+            })
+            .collect();
+        let node = |c: [isize; 3]| -> Real {
+            g.slot(c[0], c[1], c[2])
+                .map(|t| nodes[t])
+                .filter(|v| !v.is_nan())
+                .unwrap_or_else(|| node_at(c))
         };
         // the aperture of the lower face (axis a) of slot s between two
         // liquid cells: its fraction with ψ < 0
@@ -313,7 +311,6 @@ impl Cut {
             v
         };
         let reach = REACH * dx;
-        let r = REACH.ceil() as isize;
         let cells: Vec<usize> = (0..ns).filter(|&s| liquid[s]).collect();
         let per_cell: Vec<Option<Vec<(usize, usize, Vec3)>>> = cells
             .par_iter()
@@ -322,22 +319,22 @@ impl Cut {
                 if a_c.norm() < MIN_CLOSURE {
                     return Some(Vec::new());
                 }
-                let c = g.cell(s);
                 let xc = g.cell_pos(s);
                 let mut found: Vec<(usize, Real)> = Vec::new();
                 let dir = a_c.normalize();
-                around(c, r, &mut |i| {
-                    let q = ((surf.nb.x[i] - xc).norm() / reach).powi(2);
+                search.for_each_within(&pts, &xc, reach, |j, d| {
+                    let i = layer[j];
+                    let q = d / (reach * reach);
                     let cos = normal[i].dot(&dir);
-                    if q < 1.0 && cos > 0.0 {
+                    if cos > 0.0 {
                         found.push((i, surf.area[i] * (1.0 - q) * (1.0 - q) * cos));
                     }
                 });
+                found.sort_unstable_by_key(|e| e.0);
                 let total: Real = found.iter().map(|e| e.1).sum();
                 if total <= 0.0 || !total.is_finite() {
                     return None;
                 }
-                found.sort_unstable_by_key(|e| e.0);
                 Some(
                     found
                         .into_iter()

@@ -242,8 +242,7 @@ pub fn solve(
             info.released_faces += k.release_weak(grid, &full);
         }
         info.faces = k.len();
-        let cut_rows = cut.as_ref().map_or(Vec::new(), |c| c.coupling(&full));
-        if k.is_empty() && cut_rows.is_empty() {
+        if k.is_empty() && cut.as_ref().is_none_or(|c| c.entries.is_empty()) {
             return forms::solve_uncoupled(
                 grid,
                 solids,
