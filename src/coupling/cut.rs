@@ -18,8 +18,13 @@
 //!   (`solver.separate_bodies`, `solver.open_gaps`);
 //! - a face between two liquid cells carries its liquid aperture a_f, the
 //!   fraction of the face with ψ < 0 from ψ at its corners
-//!   ([`crate::grid::fraction_inside`]), both as the face's mass and as its
-//!   share of the flux;
+//!   ([`crate::grid::fraction_inside`]), its share of the flux; its
+//!   inertia m̂_f is the mass the particles hand it, Σ_p m_p w_fp over the
+//!   volume particles (the last P2G) and the layer, so that the momentum
+//!   the solve gives the faces is the momentum the grid-to-particle
+//!   transfer gives the particles (with the aperture as the mass, a free
+//!   cube lost 6 % of its momentum in 14 frames; `docs/decisions.md`,
+//!   "The cut layer's faces weigh what the particles put on them");
 //! - the rest of a liquid cell's boundary is the sheet. Its area vector is
 //!   the closure A_c = Σ_f n_{c,f} w_f (1 − a_f) Δx² (n the face's outward
 //!   normal, w its open fraction; 0 inside the liquid), and the layer
@@ -28,7 +33,8 @@
 //!   Σ_i ω_ic = 1 (in a thin sheet of liquid the other face's particles are
 //!   within reach too);
 //! - continuity of cell c: Σ_f s_{c,f} a_f w_f v_f Δx² + A_c · Σ_i ω_ic u_i
-//!   = 0; the particle i feels the transpose, Δt Σ_c p_c ω_ic A_c.
+//!   = 0 with v_f = v*_f − (a_f w_f / m̂_f) (q_hi − q_lo); the particle i
+//!   feels the transpose, Δt Σ_c p_c ω_ic A_c.
 //!
 //! With the closure a uniform translation is divergence free in every cell,
 //! whatever the apertures. At rest the pressure of the cells a particle
@@ -71,15 +77,21 @@ pub const OFFSET: Real = 0.5;
 pub const CELL_REACH: Real = 0.87;
 
 /// Fraction of the layer particles' mass they keep as inertia in the solve.
-/// The liquid up to the cut already carries the body's mass (the cut lies
-/// past the layer), so the whole mass counts the layer twice: the l = 2
-/// period was +3.2 % at R = 6.144 Δx (Δt = 0.01 s), +0.3 % at 0.25 and
-/// −0.1 % at 0.1. But the layer's inertia is what holds its particles where
-/// the pressure balances their tension poorly, at a thin sheet's rim: at
-/// 0.25 the slab of `validate slab` failed (particle speeds over 6 m/s in
-/// the solve) at 1.5–3 cells for some offsets, at 0.1 at every one. 0.5
-/// runs them all and keeps the period within +1.2 % (+2.3 % at 0.005 s).
+/// The faces already carry the layer's mass (the particles take the grid's
+/// velocity after the solve), so the whole mass counts the layer twice. But
+/// the layer's inertia is what holds its particles where the pressure
+/// balances their tension poorly, at a thin sheet's rim: at 0.25 the slab
+/// of `validate slab` failed (particle speeds over 6 m/s in the solve) at
+/// 1.5–3 cells for some offsets, at 0.1 at every one (faces of aperture
+/// mass, session 38). With the faces' particle mass, the l = 2 period at
+/// R = 6.144 Δx is +0.2 % at 0.5 (Δt = 0.01 s; +1.3 % at 0.005 s), +1.4 %
+/// at 0.75, +2.4 % at 1.
 pub const LAYER_INERTIA: Real = 0.5;
+
+/// Least inertia of a cut liquid face, as a fraction of its area a_f w_f
+/// (in ρΔx³): a face the particles barely reach would otherwise take any
+/// pressure gradient at once. Counted in [`Cut::light_faces`].
+pub const MASS_FLOOR: Real = 0.1;
 
 /// Closures smaller than this (in Δx²) are rounding: the cell is interior.
 const MIN_CLOSURE: Real = 1e-3;
@@ -97,12 +109,18 @@ pub struct Cut {
     /// Aperture of the lower face of each slot, per axis (between two
     /// liquid cells; 0 elsewhere).
     pub aperture: [Vec<Real>; 3],
+    /// Mobility of the lower face of each slot between two liquid cells:
+    /// its area a_f w_f over its inertia m̂_f, the particles' mass on it in
+    /// ρΔx³ (1 elsewhere).
+    pub mobility: [Vec<Real>; 3],
     /// (cell slot, particle (joint index), ω_ic Â_c), by slot then particle.
     pub entries: Vec<(usize, usize, Vec3)>,
     /// Liquid cells closed by the sheet.
     pub cut_cells: usize,
     /// Of which free ([`Cut::free`]).
     pub free_cells: usize,
+    /// Liquid faces whose inertia was floored ([`MASS_FLOOR`]).
+    pub light_faces: usize,
 }
 
 impl Cut {
@@ -115,6 +133,7 @@ impl Cut {
         h: Real,
         shift: Real,
         spacing: Real,
+        density: Real,
     ) -> Cut {
         let ns = g.slots();
         let dx = g.dx;
@@ -359,11 +378,44 @@ impl Cut {
                 }
             }
         }
+        // the faces' inertia: the mass the particles hand them (the volume
+        // particles' from the last P2G, the layer's scattered here with the
+        // same trilinear weights)
+        let mut layer_mass: [Vec<Real>; 3] = [vec![0.0; ns], vec![0.0; ns], vec![0.0; ns]];
+        for i in (0..surf.len()).filter(|&i| surf.attached[i]) {
+            for (a, m) in layer_mass.iter_mut().enumerate() {
+                let (idx, w) = g.stencil(a, &surf.nb.x[i]);
+                for k in (0..8).filter(|&k| idx[k] != NONE) {
+                    m[idx[k] as usize] += w[k] * surf.mass[i];
+                }
+            }
+        }
+        let unit = density * dx.powi(3);
+        let mut light_faces = 0;
+        let mobility = [0, 1, 2].map(|a| {
+            let (ap, lm) = (&aperture[a], &layer_mass[a]);
+            let per: Vec<(Real, bool)> = (0..ns)
+                .into_par_iter()
+                .map(|s| {
+                    if ap[s] <= 0.0 {
+                        return (1.0, false);
+                    }
+                    let area = ap[s] * g.weight[a][s];
+                    let m = (g.mass[a][s] + lm[s]) / unit;
+                    let floor = MASS_FLOOR * area;
+                    (area / m.max(floor), m < floor)
+                })
+                .collect();
+            light_faces += per.iter().filter(|e| e.1).count();
+            per.into_iter().map(|e| e.0).collect()
+        });
         Cut {
             psi,
             liquid,
             free,
             aperture,
+            mobility,
+            light_faces,
             entries,
             cut_cells,
             free_cells,
@@ -415,7 +467,7 @@ impl Cut {
                                 let ap = self.aperture[a][s];
                                 if ap > 0.0 {
                                     rhs += ap * w * g.u[a][s];
-                                    diag += ap * w;
+                                    diag += ap * w * self.mobility[a][s];
                                     lo[a] = index[n];
                                 }
                             }
@@ -442,10 +494,11 @@ impl Cut {
                         if self.liquid[t] {
                             let ap = self.aperture[a][t];
                             if ap > 0.0 {
+                                let k = ap * w * self.mobility[a][t];
                                 rhs -= ap * w * g.u[a][t];
-                                diag += ap * w;
+                                diag += k;
                                 up[a] = index[t];
-                                off[a] = -ap * w;
+                                off[a] = -k;
                             }
                         } else if self.free[s] {
                             let (th, c) = ghost(psi[s], psi[t]);
@@ -491,7 +544,9 @@ impl Cut {
                 return (u - (qh - ql) / f.theta + extra(ax, s), 1);
             }
             match (f.lo, f.hi) {
-                (Some(_), Some(_)) if self.aperture[ax][s] > 0.0 => (u - (qh - ql), 1),
+                (Some(_), Some(_)) if self.aperture[ax][s] > 0.0 => {
+                    (u - self.mobility[ax][s] * (qh - ql), 1)
+                }
                 (Some(_), None) if self.free[lower(ax, s)] => (u - (qh - ql) / f.theta, 1),
                 (None, Some(_)) if self.free[s] => (u - (qh - ql) / f.theta, 1),
                 _ => (u, 0),

@@ -121,6 +121,7 @@ pub fn solve(
             prm.surface.mls.h,
             shift,
             spacing.unwrap_or(0.0),
+            prm.surface.density,
         )
     });
     if cut.is_some() {
@@ -135,6 +136,7 @@ pub fn solve(
     if let Some(c) = &cut {
         info.cut_cells = c.cut_cells;
         info.cut_free_cells = c.free_cells;
+        info.cut_light_faces = c.light_faces;
     }
     // the grid's system and K, and beside them the particles' order in the
     // coupled system (it needs only the Laplacian's pattern)

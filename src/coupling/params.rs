@@ -230,6 +230,10 @@ pub struct CouplingInfo {
     /// See `cut_cells`.
     #[serde(default)]
     pub cut_free_cells: usize,
+    /// Liquid faces of the cut whose particle mass fell below
+    /// [`super::cut::MASS_FLOOR`] of their area (their inertia is floored).
+    #[serde(default)]
+    pub cut_light_faces: usize,
     /// Mean pressure (Pa) of the liquid cells deeper than Δx below the
     /// surface (0 if none): the Young–Laplace jump of a droplet at rest.
     pub interior_pressure: Real,

@@ -76,6 +76,11 @@ pub struct MacGrid {
     pub u: [Vec<Real>; 3],
     /// Face velocities after the particle-to-grid transfer (for the FLIP update).
     pub u_old: [Vec<Real>; 3],
+    /// Mass of each face at the last particle-to-grid transfer (kg):
+    /// Σ_p m_p w_fp over the volume particles, the weight with which the
+    /// grid-to-particle transfer hands the face's velocity change back to
+    /// them.
+    pub mass: [Vec<Real>; 3],
     /// Fraction of each face open to liquid (1 open, 0 closed by a solid or wall).
     pub weight: [Vec<Real>; 3],
     /// Liquid level set at cell centres (m), negative inside the liquid.
@@ -276,7 +281,12 @@ impl MacGrid {
         }
         let ns = self.slots();
         for a in 0..3 {
-            for f in [&mut self.u[a], &mut self.u_old[a], &mut self.weight[a]] {
+            for f in [
+                &mut self.u[a],
+                &mut self.u_old[a],
+                &mut self.weight[a],
+                &mut self.mass[a],
+            ] {
                 f.clear();
                 f.resize(ns, 0.0);
             }

@@ -219,11 +219,17 @@ pub fn particles_to_grid(
     }
     // one gather over the 27 cells around each slot gives its three lower
     // faces (weights relative to the slot's lower corner) and φ at its centre
-    let per_slot: Vec<([Real; 3], [u8; 3], Real, Vec3)> = (0..ns)
+    let per_slot: Vec<([Real; 3], [u8; 3], Real, Vec3, [Real; 3])> = (0..ns)
         .into_par_iter()
         .map(|s| {
             if !g.in_domain(s) {
-                return ([0.0; 3], [0; 3], g.dx, Vec3::repeat(Real::INFINITY));
+                return (
+                    [0.0; 3],
+                    [0; 3],
+                    g.dx,
+                    Vec3::repeat(Real::INFINITY),
+                    [0.0; 3],
+                );
             }
             let c = g.cell(s);
             let corner = Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real);
@@ -295,13 +301,15 @@ pub fn particles_to_grid(
                     f[a] = 1;
                 }
             }
-            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx), near)
+            (u, f, (d2min.sqrt() * g.dx - r_ls).min(g.dx), near, den)
         })
         .collect();
     let mut valid: Valid = Default::default();
     let mut u: [Vec<Real>; 3] = Default::default();
+    let mut mass: [Vec<Real>; 3] = Default::default();
     for a in 0..3 {
         u[a] = per_slot.iter().map(|x| x.0[a]).collect();
+        mass[a] = per_slot.iter().map(|x| x.4[a]).collect();
         valid[a] = per_slot.iter().map(|x| x.1[a]).collect();
     }
     let mut phi: Vec<Real> = per_slot.iter().map(|x| x.2).collect();
@@ -364,6 +372,7 @@ pub fn particles_to_grid(
         })
         .collect();
     grid.u = u;
+    grid.mass = mass;
     grid.phi = phi;
     grid.gap = gaps;
     valid
