@@ -14,8 +14,11 @@
 //!   turned outward), zero [`OFFSET`] spacings past it; elsewhere the
 //!   liquid level set φ moved by `shift`. Liquid cells: ψ < 0, and near the
 //!   layer every cell the cut reaches ([`CELL_REACH`]); a cell whose every
-//!   face is closed is none, nor is one a separation rule made air
-//!   (`solver.separate_bodies`, `solver.open_gaps`);
+//!   face is closed is none. A separation rule's air cells
+//!   (`solver.separate_bodies`, `solver.open_gaps`) count only through φ:
+//!   near the layer ψ is the layer's, and keeping them air there cut the
+//!   facing sides of the collision's cubes short (the left cube fell to
+//!   16.3 mm/s by frame 12, against 18.85 without);
 //! - a face between two liquid cells carries its liquid aperture a_f, the
 //!   fraction of the face with ψ < 0 from ψ at its corners
 //!   ([`crate::grid::fraction_inside`]), its share of the flux; its
@@ -212,11 +215,7 @@ impl Cut {
             .into_par_iter()
             .map(|s| {
                 let bound = if near[s] { tau } else { 0.0 };
-                // (a separation rule's air stays air)
-                !g.gap.get(s).copied().unwrap_or(false)
-                    && g.in_domain(s)
-                    && psi[s] < bound
-                    && (0..3).map(|a| open(s, a)).sum::<Real>() > 0.0
+                g.in_domain(s) && psi[s] < bound && (0..3).map(|a| open(s, a)).sum::<Real>() > 0.0
             })
             .collect();
         // ψ at a node (lower corner of cell c): the layer's plane distance

@@ -91,10 +91,6 @@ pub struct MacGrid {
     /// per axis; empty when there are none. The projection keeps their
     /// velocity and counts their flux.
     pub prescribed: [Vec<bool>; 3],
-    /// Cells that a separation rule (`solver.separate_bodies`,
-    /// `solver.open_gaps`) made air at the last particle-to-grid transfer;
-    /// empty when neither rule ran.
-    pub gap: Vec<bool>,
 }
 
 /// How the face velocities are formed where the particles around a face do

@@ -325,23 +325,14 @@ pub fn particles_to_grid(
     } else {
         Vec::new()
     };
-    let mut gaps: Vec<bool> = Vec::new();
     if set.separate_bodies {
         // liquid cells that the volume particles do not join stay apart
         let gap = super::bodies::separated_cells(g, parts, &phi, &near);
         make_air(&mut phi, &gap);
-        gaps = gap;
     }
     if set.open_gaps {
         let gap = gap_cells(g, sort, parts, &phi, &near);
         make_air(&mut phi, &gap);
-        if gaps.is_empty() {
-            gaps = gap;
-        } else {
-            for (a, b) in gaps.iter_mut().zip(&gap) {
-                *a |= *b;
-            }
-        }
     }
     // The distance to the nearest particle is not a distance to the surface
     // deep inside the liquid; one Jacobi pass of the Lipschitz bound
@@ -374,7 +365,6 @@ pub fn particles_to_grid(
     grid.u = u;
     grid.mass = mass;
     grid.phi = phi;
-    grid.gap = gaps;
     valid
 }
 
