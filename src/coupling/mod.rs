@@ -387,7 +387,12 @@ pub fn solve(
     let mut u = u;
     for (i, &s) in surf.nb.store.iter().enumerate() {
         if surf.attached[i] {
-            u[i] = grid.velocity(&parts.x[s]);
+            u[i] = match &cut {
+                Some(c) if std::env::var("CFX_FULLST").is_err() => {
+                    c.layer_velocity(grid, &parts.x[s])
+                }
+                _ => grid.velocity(&parts.x[s]),
+            };
         }
     }
     write_back(parts, &surf, &u);
