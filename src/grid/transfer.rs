@@ -184,6 +184,11 @@ impl P2gSettings {
     }
 }
 
+/// What the gather of one slot finds: its three lower faces' velocities and
+/// whether they hold one, φ at its centre, the offset of its nearest
+/// particle, and the faces' masses.
+type SlotGather = ([Real; 3], [u8; 3], Real, Vec3, [Real; 3]);
+
 /// Algorithm 1 step 5: particle velocities to the faces, and the liquid level
 /// set. With `affine` (APIC), particle p contributes `u_p,a + c_p,a · (x_f − x_p)`
 /// to face f of component a instead of `u_p,a`.
@@ -219,7 +224,7 @@ pub fn particles_to_grid(
     }
     // one gather over the 27 cells around each slot gives its three lower
     // faces (weights relative to the slot's lower corner) and φ at its centre
-    let per_slot: Vec<([Real; 3], [u8; 3], Real, Vec3, [Real; 3])> = (0..ns)
+    let per_slot: Vec<SlotGather> = (0..ns)
         .into_par_iter()
         .map(|s| {
             if !g.in_domain(s) {
