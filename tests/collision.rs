@@ -123,8 +123,8 @@ fn approaching_droplets_keep_their_momentum_with_open_gaps() {
 /// and the facing layers join the volume. Each cube keeps its launch speed
 /// until they touch: the first frame in which sheet particles join the
 /// volume. With the cut layer (the preset's) the cubes round at Rayleigh's
-/// rate and touch in frame 8 (1,736 sheet particles join in frame 9), the
-/// left cube at 19.94–20.13 mm/s before (session 39); the coupled layer
+/// rate and touch in frame 8 (1,560 sheet particles join in frame 9), the
+/// left cube at 19.93–20.08 mm/s before (session 39); the coupled layer
 /// rounds them about half as fast, and its cube kept its speed through
 /// frame 14.
 #[test]
