@@ -388,10 +388,8 @@ pub fn solve(
     for (i, &s) in surf.nb.store.iter().enumerate() {
         if surf.attached[i] {
             u[i] = match &cut {
-                Some(c) if std::env::var("CFX_FULLST").is_err() => {
-                    c.layer_velocity(grid, &parts.x[s])
-                }
-                _ => grid.velocity(&parts.x[s]),
+                Some(c) => c.layer_velocity(grid, &parts.x[s]),
+                None => grid.velocity(&parts.x[s]),
             };
         }
     }
