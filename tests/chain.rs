@@ -87,3 +87,44 @@ fn the_collision_sheet_opens_to_its_taylor_width_and_closes_into_a_link() {
         .find(|(hi, z, _)| *hi > 0.30 && *z < 0.5 * wide);
     assert!(closed.is_some(), "the sheet does not close: {bands:?}");
 }
+
+/// The same preset with the cut layer (`coupling.layer: cut`), 20 frames at
+/// `--scale 2`. Nothing in the scene drives a particle faster than a fall
+/// from the nozzles at the jets' speed, v₀ + g t, plus the speed the
+/// Laplace pressure of a cell-sized feature can give, √(4σ/(ρΔx)) (0.44
+/// m/s). Two faults of the cut once broke that bound (docs/decisions.md,
+/// "Two faults the fluid chain found"). The free cells' faces to air took
+/// 100 × their rows' pressure gradient, which threw particles at 5.6 m/s
+/// at frame 18 (bound 2.8). Then the outlier rule read a jump of q across
+/// closed faces as a velocity, and it halved the substep four times and
+/// stopped the run at frame 19.
+#[test]
+fn the_cut_layer_runs_the_chain_with_no_particle_faster_than_its_fall() {
+    let (mut sim, _cache) = common::open_preset("fluid_chain_links", 20, Some(2.0), |t| {
+        format!("{t}coupling:\n  layer: cut\n")
+    });
+    let (v0, g, sigma, rho, dx): (f64, f64, f64, f64, f64) = (0.6, 9.81, 0.2, 1000.0, 2.0 / 480.0);
+    let capillary: f64 = (4.0 * sigma / (rho * dx)).sqrt();
+    let mut worst: (f64, u32) = (0.0, 0);
+    let mut halvings = 0;
+    sim.run(&AtomicBool::new(false), |_, r| {
+        let bound = v0 + g * r.time + capillary;
+        eprintln!(
+            "frame {}: fastest {:.2} m/s, bound {:.2}",
+            r.frame, r.speed.max, bound
+        );
+        if r.speed.max / bound > worst.0 {
+            worst = (r.speed.max / bound, r.frame);
+        }
+        halvings += r.fallbacks.step_halvings;
+    })
+    .unwrap();
+    assert!(sim.state.particles.all_finite());
+    assert!(
+        worst.0 < 1.0,
+        "frame {}: a particle at {:.2} × the fall's bound",
+        worst.1,
+        worst.0
+    );
+    assert_eq!(halvings, 0, "substeps halved");
+}

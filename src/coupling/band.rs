@@ -29,10 +29,14 @@ use crate::math::{Real, Vec3};
 /// point is not at least Δx/2 inside the liquid (a body thinner than the
 /// probe depth), and every free sheet, keeps c = 0 (the sheet's own
 /// velocity).
-pub fn band_correction(grid: &MacGrid, surf: &Surface, k: &Constraints) -> Vec<Real> {
-    let probes = probes(grid, surf);
+pub fn band_correction(
+    grid: &MacGrid,
+    surf: &Surface,
+    k: &Constraints,
+    probes: &BandProbes,
+) -> Vec<Real> {
     face_sums(grid, k, |a, xf, i| {
-        probes[i]
+        probes.0[i]
             .as_ref()
             .map(|p| p.grad[a].dot(&(xf - surf.nb.x[i])))
     })
@@ -57,10 +61,9 @@ pub fn band_correction(grid: &MacGrid, surf: &Surface, k: &Constraints) -> Vec<R
 /// pulled the surface layer toward the biased faces, and the droplet lost
 /// ~1 % of its kinetic energy every substep (`docs/decisions.md`, "A
 /// linear velocity at the free surface").
-pub fn band_extension(grid: &MacGrid, surf: &Surface, k: &Constraints) -> Vec<Real> {
-    let probes = probes(grid, surf);
+pub fn band_extension(grid: &MacGrid, k: &Constraints, probes: &BandProbes) -> Vec<Real> {
     face_sums(grid, k, |a, xf, i| {
-        probes[i]
+        probes.0[i]
             .as_ref()
             .filter(|p| p.depth >= EXTENSION_DEPTH * grid.dx)
             .map(|p| p.v[a] + p.grad[a].dot(&(xf - p.y)))
@@ -83,9 +86,18 @@ struct Probe {
     grad: [Vec3; 3],
 }
 
+/// The probes of a substep's sheet particles, read once from v** before
+/// the solve and shared by [`band_extension`] and [`band_correction`]
+/// (and by the retries of a failed solve, whose grid they precede).
+pub struct BandProbes(Vec<Option<Probe>>);
+
 /// The probe of each sheet particle attached to a volume: the point
 /// [`BAND_PROBE`] Δx inside the liquid along its normal (oriented by the
 /// level set), if that point is at least Δx/2 inside the liquid.
+pub fn band_probes(grid: &MacGrid, surf: &Surface) -> BandProbes {
+    BandProbes(probes(grid, surf))
+}
+
 fn probes(grid: &MacGrid, surf: &Surface) -> Vec<Option<Probe>> {
     use rayon::prelude::*;
     let d = BAND_PROBE * grid.dx;

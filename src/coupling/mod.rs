@@ -47,7 +47,7 @@ use crate::linsolve::SolveError;
 use crate::math::{Real, Vec3};
 use crate::particles::Particles;
 use crate::solids::SolidSet;
-pub use band::{band_correction, band_extension, BAND_PROBE};
+pub use band::{band_correction, band_extension, band_probes, BandProbes, BAND_PROBE};
 pub use params::{
     BandVelocity, CouplingError, CouplingInfo, CouplingParams, FaceMass, Krylov, LayerTension,
     Method, GMRES_RESTART, MAX_OUTLIER_ROUNDS,
@@ -213,8 +213,14 @@ pub fn solve(
     // the liquid's velocity at the constraint faces, from below the band
     // (band::band_extension); u_old with it, so that FLIP carries to the
     // volume particles only what the solve changes
-    if prm.band == BandVelocity::Extended {
-        let ext = band_extension(grid, &surf, &constrained);
+    // the band's probes, read once from v** before the extension changes
+    // the constraint faces (band::band_probes)
+    let probes = match prm.band {
+        BandVelocity::Extrapolated | BandVelocity::Extended => Some(band_probes(grid, &surf)),
+        BandVelocity::Sheet => None,
+    };
+    if let (BandVelocity::Extended, Some(probes)) = (prm.band, &probes) {
+        let ext = band_extension(grid, &constrained, probes);
         for (f, &e) in ext.iter().enumerate() {
             let (a, s) = constrained.faces[f];
             if grid.weight[a][s] > 0.0 && !grid.is_prescribed(a, s) {
@@ -261,9 +267,9 @@ pub fn solve(
         }
         let mut vstar: Vec<Real> = k.faces.iter().map(|&(a, s)| grid.u[a][s]).collect();
         // K v = K (J u + c): in the face rows, v** − c takes the place of v**
-        let band = match prm.band {
-            BandVelocity::Extrapolated | BandVelocity::Extended => band_correction(grid, &surf, &k),
-            BandVelocity::Sheet => vec![0.0; k.len()],
+        let band = match &probes {
+            Some(p) => band_correction(grid, &surf, &k, p),
+            None => vec![0.0; k.len()],
         };
         for (v, c) in vstar.iter_mut().zip(&band) {
             *v -= c;
@@ -332,7 +338,27 @@ pub fn solve(
         let u: Vec<Vec3> = (0..sys.np)
             .map(|i| Vec3::new(x[sys.u_row(i, 0)], x[sys.u_row(i, 1)], x[sys.u_row(i, 2)]))
             .collect();
-        let bad = release::outlier_cells(grid, &full, q, &surf.nb.x, &u, bound);
+        // (with the cut layer a face moves by its mobility times the jump
+        // of q, a closed face not at all, and a constraint face to J u
+        // whatever q: the particles' u bounds those)
+        let bad = match &cut {
+            Some(c) => release::outlier_cells(
+                grid,
+                &full,
+                q,
+                &surf.nb.x,
+                &u,
+                bound,
+                |a, f, s, o| match f {
+                    Some(f) if k.index(a, f).is_some() => 0.0,
+                    Some(f) => c.velocity_gain(a, f, s, o),
+                    None => 0.0,
+                },
+            ),
+            None => {
+                release::outlier_cells(grid, &full, q, &surf.nb.x, &u, bound, release::uniform_gain)
+            }
+        };
         if bad.is_empty() {
             break (k, vstar, sys, x, kept, u);
         }

@@ -209,9 +209,16 @@ pub fn outlier_bound(v_ref: Real, sigma: Real, density: Real, dx: Real) -> Real 
 }
 
 /// Slots of the liquid cells across one of whose faces the scaled pressure
-/// q (m/s: the velocity change it makes) jumps by more than `bound`
-/// (to 0 across a face to air), plus the cells of the particles whose
+/// q jumps by more than `bound` (to 0 across a face to air), as the
+/// velocity change it makes there, plus the cells of the particles whose
 /// solved velocity `u` exceeds it (`x`: their positions).
+///
+/// `gain(axis, face, cell, other)` is the velocity change per unit jump of
+/// q across the face (`face`: its slot, `None` at the domain's edge;
+/// `cell`: the liquid cell's slot; `other`: whether the far side is an
+/// unknown too): 1 for the ghost-fluid system ([`uniform_gain`]); the cut
+/// layer's faces move by their mobility times the jump, and a face the
+/// sheet closes not at all ([`super::cut::Cut::velocity_gain`]).
 pub fn outlier_cells(
     g: &MacGrid,
     sys: &Poisson,
@@ -219,17 +226,19 @@ pub fn outlier_cells(
     x: &[Vec3],
     u: &[Vec3],
     bound: Real,
+    gain: impl Fn(usize, Option<usize>, usize, bool) -> Real,
 ) -> Vec<usize> {
     let mut out = Vec::new();
     for (i, &c) in sys.cells.iter().enumerate() {
         let bad = (0..6).any(|k| {
+            let (a, up) = (k / 2, k % 2 == 1);
             let mut o = [0isize; 3];
-            o[k / 2] = if k % 2 == 0 { -1 } else { 1 };
-            let qn = g
-                .neighbor(c, o)
-                .and_then(|n| sys.unknown(n))
-                .map_or(0.0, |n| q[n as usize]);
-            (q[i] - qn).abs() > bound
+            o[a] = if up { 1 } else { -1 };
+            let n = g.neighbor(c, o);
+            let other = n.and_then(|n| sys.unknown(n));
+            let qn = other.map_or(0.0, |n| q[n as usize]);
+            let face = if up { n } else { Some(c) };
+            gain(a, face, c, other.is_some()) * (q[i] - qn).abs() > bound
         });
         if bad {
             out.push(c);
@@ -246,6 +255,11 @@ pub fn outlier_cells(
     out.sort_unstable();
     out.dedup();
     out
+}
+
+/// The `gain` of [`outlier_cells`] for the ghost-fluid system: q itself.
+pub fn uniform_gain(_: usize, _: Option<usize>, _: usize, _: bool) -> Real {
+    1.0
 }
 
 #[cfg(test)]
@@ -301,19 +315,43 @@ pub(crate) mod tests {
             .iter()
             .map(|&c| 0.5 * g.cell_pos(c)[1] / g.dx)
             .collect();
-        let smooth = outlier_cells(&g, &sys, &q, &[], &[], 10.0);
+        let smooth = outlier_cells(&g, &sys, &q, &[], &[], 10.0, uniform_gain);
         assert!(smooth.is_empty(), "{smooth:?}");
         let q0 = vec![0.0; sys.cells.len()];
         // a spike of 50 in one cell marks it and its six neighbours
         let mut q = q0.clone();
         let c = slot([6, 6, 6]);
         q[sys.unknown(c).unwrap() as usize] = 50.0;
-        let bad = outlier_cells(&g, &sys, &q, &[], &[], 10.0);
+        let bad = outlier_cells(&g, &sys, &q, &[], &[], 10.0, uniform_gain);
         assert_eq!(bad.len(), 7, "{bad:?}");
         assert!(bad.contains(&c));
+        // the same jump across faces that move a tenth of it (the cut
+        // layer's heavy faces) is none; a face that does not move (closed
+        // by the sheet) spares the neighbour behind it
+        let light = outlier_cells(&g, &sys, &q, &[], &[], 10.0, |_, _, _, _| 0.1);
+        assert!(light.is_empty(), "{light:?}");
+        let up = slot([7, 6, 6]);
+        let closed = |a: usize, f: Option<usize>, _: usize, _: bool| {
+            if a == 0 && f == Some(up) {
+                0.0
+            } else {
+                1.0
+            }
+        };
+        let bad = outlier_cells(&g, &sys, &q, &[], &[], 10.0, closed);
+        assert_eq!(bad.len(), 6, "{bad:?}");
+        assert!(bad.contains(&c) && !bad.contains(&up));
         // a particle faster than the bound marks its cell
         let x = [Vec3::new(0.45, 0.55, 0.65)];
-        let bad = outlier_cells(&g, &sys, &q0, &x, &[Vec3::new(0.0, 12.0, 0.0)], 10.0);
+        let bad = outlier_cells(
+            &g,
+            &sys,
+            &q0,
+            &x,
+            &[Vec3::new(0.0, 12.0, 0.0)],
+            10.0,
+            uniform_gain,
+        );
         assert_eq!(bad, vec![slot([4, 5, 6])]);
         // sheet particles a third of a cell off the centres of a 3×3×3 group
         // of cells: each cell is enclosed by constraint faces and pinned
