@@ -29,6 +29,88 @@ pub const THETA_MIN: Real = 0.01;
 /// One matrix row: diagonal, +x/+y/+z neighbours and coefficients, −x/−y/−z neighbours, rhs, θ clamps.
 pub(crate) type Row = (Real, [u32; 3], [Real; 3], [u32; 3], Real, usize);
 
+/// How one open, unprescribed face of a liquid cell enters the cell's row
+/// ([`rows`]).
+pub(crate) enum FaceTerm {
+    /// To the neighbouring unknown: the face's velocity weighs `flux` in
+    /// the divergence, and the pressure difference `coef` in the operator.
+    Liquid { flux: Real, coef: Real },
+    /// To air, at the ghost-fluid fraction θ (and whether it was clamped):
+    /// the face's weight in the divergence, weight/θ on the diagonal.
+    Air { theta: Real, clamps: usize },
+    /// Not in the row (closed, its flux someone else's).
+    Closed,
+}
+
+/// The rows of the liquid `cells` (unknown `index` per slot): prescribed
+/// faces go to the right-hand side, faces with `skip(axis, slot)` are left
+/// out, and every other open face enters as
+/// `term(axis, face slot, cell slot, slot across the face, weight)` says.
+pub(crate) fn rows(
+    g: &MacGrid,
+    index: &[u32],
+    cells: &[usize],
+    skip: impl Fn(usize, usize) -> bool + Sync,
+    term: impl Fn(usize, usize, usize, Option<usize>, Real) -> FaceTerm + Sync,
+) -> Vec<Row> {
+    cells
+        .par_iter()
+        .map(|&s| {
+            let mut diag = 0.0;
+            let mut up = [NONE; 3];
+            let mut lo = [NONE; 3];
+            let mut off = [0.0; 3];
+            let mut rhs = 0.0;
+            let mut clamps = 0;
+            for a in 0..3 {
+                let w = g.weight[a][s];
+                if w > 0.0 && g.is_prescribed(a, s) {
+                    rhs += w * g.u[a][s];
+                } else if w > 0.0 && !skip(a, s) {
+                    let n = g.neighbor(s, unit(a, -1));
+                    match term(a, s, s, n, w) {
+                        FaceTerm::Liquid { flux, coef } => {
+                            rhs += flux * g.u[a][s];
+                            diag += coef;
+                            lo[a] = n.map_or(NONE, |n| index[n]);
+                        }
+                        FaceTerm::Air { theta, clamps: c } => {
+                            rhs += w * g.u[a][s];
+                            diag += w / theta;
+                            clamps += c;
+                        }
+                        FaceTerm::Closed => {}
+                    }
+                }
+                let t = g.neighbor(s, unit(a, 1));
+                let w = t.map_or(0.0, |t| g.weight[a][t]);
+                if w > 0.0 {
+                    let t = t.unwrap_or(0);
+                    if g.is_prescribed(a, t) {
+                        rhs -= w * g.u[a][t];
+                    } else if !skip(a, t) {
+                        match term(a, t, s, Some(t), w) {
+                            FaceTerm::Liquid { flux, coef } => {
+                                rhs -= flux * g.u[a][t];
+                                diag += coef;
+                                up[a] = index[t];
+                                off[a] = -coef;
+                            }
+                            FaceTerm::Air { theta, clamps: c } => {
+                                rhs -= w * g.u[a][t];
+                                diag += w / theta;
+                                clamps += c;
+                            }
+                            FaceTerm::Closed => {}
+                        }
+                    }
+                }
+            }
+            (diag, up, off, lo, rhs, clamps)
+        })
+        .collect()
+}
+
 /// What the projection did.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ProjectionInfo {
@@ -186,60 +268,18 @@ impl Poisson {
             }
         }
         let phi_at = |t: Option<usize>| t.map_or(dx, |t| phi[t]);
-        let rows: Vec<Row> = cells
-            .par_iter()
-            .map(|&s| {
-                let mut diag = 0.0;
-                let mut up = [NONE; 3];
-                let mut lo = [NONE; 3];
-                let mut off = [0.0; 3];
-                let mut rhs = 0.0;
-                let mut clamps = 0;
-                for a in 0..3 {
-                    let w_lo = g.weight[a][s];
-                    if w_lo > 0.0 && g.is_prescribed(a, s) {
-                        rhs += w_lo * g.u[a][s];
-                    } else if w_lo > 0.0 && !skip(a, s) {
-                        let n = g.neighbor(s, unit(a, -1));
-                        rhs += w_lo * g.u[a][s];
-                        match n.map(|n| index[n]) {
-                            Some(i) if i != NONE => {
-                                diag += w_lo;
-                                lo[a] = i;
-                            }
-                            _ => {
-                                let (th, c) = theta(phi[s], phi_at(n));
-                                clamps += c as usize;
-                                diag += w_lo / th;
-                            }
-                        }
-                    }
-                    let t = g.neighbor(s, unit(a, 1));
-                    let w_hi = t.map_or(0.0, |t| g.weight[a][t]);
-                    if w_hi > 0.0 {
-                        let t = t.unwrap_or(0);
-                        if g.is_prescribed(a, t) {
-                            rhs -= w_hi * g.u[a][t];
-                            continue;
-                        }
-                        if skip(a, t) {
-                            continue;
-                        }
-                        rhs -= w_hi * g.u[a][t];
-                        if index[t] != NONE {
-                            diag += w_hi;
-                            up[a] = index[t];
-                            off[a] = -w_hi;
-                        } else {
-                            let (th, c) = theta(phi[s], phi[t]);
-                            clamps += c as usize;
-                            diag += w_hi / th;
-                        }
+        let rows = rows(g, &index, &cells, skip, |_, _, s, across, w| {
+            match across.filter(|&t| index[t] != NONE) {
+                Some(_) => FaceTerm::Liquid { flux: w, coef: w },
+                None => {
+                    let (theta, c) = theta(phi[s], phi_at(across));
+                    FaceTerm::Air {
+                        theta,
+                        clamps: c as usize,
                     }
                 }
-                (diag, up, off, lo, rhs, clamps)
-            })
-            .collect();
+            }
+        });
         Poisson::from_rows(phi, index, cells, rows)
     }
 
