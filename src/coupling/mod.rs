@@ -404,6 +404,20 @@ pub fn solve(
         Some(c) => c.apply(grid, &full, q, |a, s| k.index(a, s).is_some(), extra),
         None => full.apply(grid, q, extra),
     };
+    // the momentum the layer took in the solve, which its velocity from
+    // the grid below drops, back to its body's faces (Cut::hand_back)
+    if let Some(c) = &cut {
+        let dp: Vec<(Vec3, Vec3)> = (0..surf.len())
+            .filter(|&i| surf.attached[i])
+            .map(|i| {
+                (
+                    surf.nb.x[i],
+                    surf.mass[i] * (u[i] - parts.v[surf.nb.store[i]]),
+                )
+            })
+            .collect();
+        c.hand_back(grid, &dp, sc.density);
+    }
     extrapolate(grid, &mut valid, layers);
     constrain_solids(grid, solids);
     // the surface layer of a volume moves with the liquid it bounds: its

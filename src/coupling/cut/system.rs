@@ -148,4 +148,92 @@ impl Cut {
             }
         })
     }
+
+    /// Hands each body the momentum its layer took in the solve: `dp`
+    /// holds each layer particle's position and m̂_i (u_i − v_i), its
+    /// solved change at the inertia it had in the solve
+    /// ([`super::LAYER_INERTIA`]). Each body's solved liquid faces (an
+    /// aperture above 0, not prescribed) get the same velocity change per
+    /// axis, Σ_i dp_i / Σ_f m̂_f. A uniform change is divergence free in
+    /// every cut cell (the closure's identity), and the layer, which then
+    /// reads the grid, moves with it.
+    ///
+    /// The layer's particles take the grid's velocity after the solve
+    /// ([`Cut::layer_velocity`]), which drops the momentum the pressure of
+    /// the cells they close gave them. The solve itself conserves momentum:
+    /// the faces receive −Σ_c q_c A_c and the layer +Σ_c q_c A_c. But q
+    /// does not balance each particle's tension (a cell has one q for
+    /// several particles), and where the cut lies unevenly on the grid the
+    /// sum is not zero. A cube placed off the grid's symmetry at
+    /// `--scale 2` pushed itself by −0.30 mm/s every substep, at rest or
+    /// moving at ±20 mm/s alike. Its faces lost −3.8e-6 kg m/s in a substep
+    /// while its layer took +3.9e-6 (docs/decisions.md, "The cut layer
+    /// hands its body the momentum its layer took").
+    pub fn hand_back(&self, g: &mut MacGrid, dp: &[(Vec3, Vec3)], density: Real) {
+        let (body, n) = self.bodies(g);
+        let unit = density * g.dx.powi(3);
+        let mut sum = vec![Vec3::zeros(); n];
+        for (x, p) in dp {
+            let c = g.cell_of(x);
+            if let Some(b) = g
+                .slot(c[0], c[1], c[2])
+                .map(|s| body[s])
+                .filter(|&b| b != NONE)
+            {
+                sum[b as usize] += p;
+            }
+        }
+        // the solved faces (axis, slot, body) and each body's inertia
+        let mut faces = Vec::new();
+        let mut mass = vec![Vec3::zeros(); n];
+        for (a, ap) in self.aperture.iter().enumerate() {
+            for (s, &ap) in ap.iter().enumerate() {
+                if ap > 0.0 && !g.is_prescribed(a, s) && body[s] != NONE {
+                    let b = body[s] as usize;
+                    mass[b][a] += ap * g.weight[a][s] / self.mobility[a][s] * unit;
+                    faces.push((a, s, b));
+                }
+            }
+        }
+        let du: Vec<Vec3> = sum
+            .iter()
+            .zip(&mass)
+            .map(|(p, m)| Vec3::from_fn(|a, _| if m[a] > 0.0 { p[a] / m[a] } else { 0.0 }))
+            .collect();
+        for (a, s, b) in faces {
+            g.u[a][s] += du[b][a];
+        }
+    }
+
+    /// The connected bodies of the cut liquid: a body id per slot (cells
+    /// joined through faces of aperture > 0), [`NONE`] outside the liquid;
+    /// and the number of bodies.
+    pub fn bodies(&self, g: &MacGrid) -> (Vec<u32>, usize) {
+        let ns = g.slots();
+        let mut id = vec![NONE; ns];
+        let mut n = 0u32;
+        let mut stack = Vec::new();
+        for s0 in 0..ns {
+            if !self.liquid[s0] || id[s0] != NONE {
+                continue;
+            }
+            id[s0] = n;
+            stack.push(s0);
+            while let Some(s) = stack.pop() {
+                for a in 0..3 {
+                    // the lower face (a, s) and the upper face (a, t)
+                    let lo = g.neighbor(s, unit(a, -1)).map(|l| (l, s));
+                    let hi = g.neighbor(s, unit(a, 1)).map(|t| (t, t));
+                    for (t, f) in [lo, hi].into_iter().flatten() {
+                        if self.liquid[t] && id[t] == NONE && self.aperture[a][f] > 0.0 {
+                            id[t] = n;
+                            stack.push(t);
+                        }
+                    }
+                }
+            }
+            n += 1;
+        }
+        (id, n as usize)
+    }
 }
