@@ -210,15 +210,15 @@ pub fn solve(
         info.jump_faces = air.len();
         full.set_air(grid, air);
     }
-    // the liquid's velocity at the constraint faces, from below the band
-    // (band::band_extension); u_old with it, so that FLIP carries to the
-    // volume particles only what the solve changes
     // the band's probes, read once from v** before the extension changes
     // the constraint faces (band::band_probes)
     let probes = match prm.band {
         BandVelocity::Extrapolated | BandVelocity::Extended => Some(band_probes(grid, &surf)),
         BandVelocity::Sheet => None,
     };
+    // the liquid's velocity at the constraint faces, from below the band
+    // (band::band_extension); u_old with it, so that FLIP carries to the
+    // volume particles only what the solve changes
     if let (BandVelocity::Extended, Some(probes)) = (prm.band, &probes) {
         let ext = band_extension(grid, &constrained, probes);
         for (f, &e) in ext.iter().enumerate() {
