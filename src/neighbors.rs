@@ -322,6 +322,39 @@ pub fn neighbor_lists_kiddo(points: &[Vec3], radius: Real) -> NeighborLists {
     NeighborLists::from_rows(rows)
 }
 
+/// Connected components of a graph on the nodes 0..n: a label per node
+/// (`u32::MAX` for the nodes `active` leaves out) and the number of
+/// components, numbered in the order of their lowest node.
+/// `neighbors(i, push)` calls `push(j)` for each neighbour j of i; j out of
+/// range or inactive is skipped. Used for a film's separate sheets
+/// (`film::air`) and the cut liquid's bodies (`coupling::cut`).
+pub fn components(
+    n: usize,
+    active: impl Fn(usize) -> bool,
+    neighbors: impl Fn(usize, &mut dyn FnMut(usize)),
+) -> (Vec<u32>, usize) {
+    let mut label = vec![u32::MAX; n];
+    let mut count = 0u32;
+    let mut stack = Vec::new();
+    for s in 0..n {
+        if label[s] != u32::MAX || !active(s) {
+            continue;
+        }
+        label[s] = count;
+        stack.push(s);
+        while let Some(i) = stack.pop() {
+            neighbors(i, &mut |j| {
+                if j < n && label[j] == u32::MAX && active(j) {
+                    label[j] = count;
+                    stack.push(j);
+                }
+            });
+        }
+        count += 1;
+    }
+    (label, count as usize)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

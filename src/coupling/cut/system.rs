@@ -209,31 +209,21 @@ impl Cut {
     /// joined through faces of aperture > 0), [`NONE`] outside the liquid;
     /// and the number of bodies.
     pub fn bodies(&self, g: &MacGrid) -> (Vec<u32>, usize) {
-        let ns = g.slots();
-        let mut id = vec![NONE; ns];
-        let mut n = 0u32;
-        let mut stack = Vec::new();
-        for s0 in 0..ns {
-            if !self.liquid[s0] || id[s0] != NONE {
-                continue;
-            }
-            id[s0] = n;
-            stack.push(s0);
-            while let Some(s) = stack.pop() {
+        crate::neighbors::components(
+            g.slots(),
+            |s| self.liquid[s],
+            |s, push| {
                 for a in 0..3 {
                     // the lower face (a, s) and the upper face (a, t)
                     let lo = g.neighbor(s, unit(a, -1)).map(|l| (l, s));
                     let hi = g.neighbor(s, unit(a, 1)).map(|t| (t, t));
                     for (t, f) in [lo, hi].into_iter().flatten() {
-                        if self.liquid[t] && id[t] == NONE && self.aperture[a][f] > 0.0 {
-                            id[t] = n;
-                            stack.push(t);
+                        if self.aperture[a][f] > 0.0 {
+                            push(t);
                         }
                     }
                 }
-            }
-            n += 1;
-        }
-        (id, n as usize)
+            },
+        )
     }
 }

@@ -152,27 +152,15 @@ pub struct AirInfo {
 /// Connected components of the sheet neighbour graph: a label per particle
 /// and the number of components.
 pub fn components<'a>(n: usize, nbrs: impl Fn(usize) -> &'a [u32]) -> (Vec<u32>, usize) {
-    let mut label = vec![u32::MAX; n];
-    let mut count = 0u32;
-    let mut stack = Vec::new();
-    for s in 0..n {
-        if label[s] != u32::MAX {
-            continue;
-        }
-        label[s] = count;
-        stack.push(s);
-        while let Some(i) = stack.pop() {
+    crate::neighbors::components(
+        n,
+        |_| true,
+        |i, push| {
             for &j in nbrs(i) {
-                let j = j as usize;
-                if j < n && label[j] == u32::MAX {
-                    label[j] = count;
-                    stack.push(j);
-                }
+                push(j as usize);
             }
-        }
-        count += 1;
-    }
-    (label, count as usize)
+        },
+    )
 }
 
 /// The pressure p of an air volume whose walls, left alone, change it at the
